@@ -1,0 +1,168 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ubersim/component.hpp"
+#include "ubersim/events.hpp"
+#include "ubersim/params.hpp"
+#include "ubersim/plugin.hpp"
+#include "ubersim/scene.hpp"
+#include "ubersim/world_state.hpp"
+#include "ubersim/kernel/model_error.hpp"
+
+// Typed, validated contents of the model files (models/*/*.yaml). SI units throughout.
+namespace ubersim::kernel {
+
+/// Surface pair entry of a world's material table: the surface used when `a` touches `b`.
+struct MaterialPair {
+  std::string a;             ///< material name
+  std::string b;             ///< material name
+  SurfaceMaterial surface;   ///< contact parameters for the pair (its name is "a|b")
+};
+
+/// The perimeter wall.
+struct WallModel {
+  double height = 0.1;       ///< m
+  double thickness = 0.05;   ///< m
+  double corner_cut = 0.0;   ///< length of the short angled wall across each corner (2003 field), m; 0: square corners
+};
+
+/// A field model file (kind: field).
+struct FieldModel {
+  std::string file;                 ///< where it was read
+  FieldGeometry geometry;           ///< sizes and markings (lines and arcs filled in by the loader)
+  double goal_wall_thickness = 0.02;  ///< m
+  WallModel wall;                   ///< perimeter wall
+  SurfaceMaterial carpet;           ///< name "carpet" unless the file says otherwise
+  SurfaceMaterial wall_surface;     ///< name "wall"
+  SurfaceMaterial goal_surface;     ///< name "goal" (inner faces are foam in the rules)
+};
+
+/// A ball model file (kind: ball).
+struct BallModel {
+  std::string file;           ///< where it was read
+  std::string name;           ///< e.g. "golf"
+  double radius = 0.0215;     ///< m
+  double mass = 0.046;        ///< kg
+  double inertia_factor = 0.4;  ///< I = factor · m · r² (0.4 solid sphere, 0.667 thin shell)
+  double linear_damping = 0.0;  ///< ODE body linear damping per step (0 = none)
+  double angular_damping = 0.0; ///< ODE body angular damping per step (0 = none)
+  SurfaceMaterial surface;    ///< name "ball" unless the file says otherwise
+};
+
+/// A plugin reference in a model file: which plugin and its own validated parameter block.
+struct ComponentModel {
+  std::string plugin;    ///< plugin id, e.g. "omni"
+  ParamView params;      ///< the block (everything under the component key except `plugin`)
+};
+
+/// A robot model file (kind: robot).
+struct RobotModel {
+  std::string file;                        ///< where it was read
+  std::string name;                        ///< e.g. "example-omni-2026"
+  RobotBodyInfo body;                      ///< chassis dimensions and mass
+  SurfaceMaterial surface;                 ///< chassis surface (name "robot" unless given)
+  std::optional<ComponentModel> drive;     ///< the drive
+  std::optional<ComponentModel> dribbler;  ///< optional dribbler
+  std::optional<ComponentModel> kicker;    ///< optional kicker
+};
+
+/// One robot placed in a world.
+struct RobotPlacement {
+  RobotId id;                               ///< team and id
+  std::shared_ptr<const RobotModel> model;  ///< its model
+  double x = 0, y = 0, yaw = 0;             ///< start pose on the field, m and rad
+  bool present = true;                      ///< on the field at start
+};
+
+/// Physics settings of a world.
+struct PhysicsModel {
+  double step = 0.001;             ///< fixed physics step, s
+  int solver_iterations = 20;      ///< QuickStep iterations
+  double erp = 0.2;                ///< global ERP
+  double cfm = 1e-7;               ///< global CFM
+  Vec3 gravity = Vec3(0, 0, -9.81);  ///< m/s²
+  std::string broadphase = "scene_graph";  ///< "scene_graph", "hash" or "sap"
+  int max_contacts = 4;            ///< contacts per geometry pair
+  double contact_surface_layer = 0.0005;  ///< m
+  double contact_max_correcting_velocity = 10.0;  ///< m/s
+};
+
+/// A transport instance of a world.
+struct TransportModel {
+  std::string plugin;   ///< plugin id
+  ParamView params;     ///< its parameter block
+};
+
+/// A world file (kind: world).
+struct WorldModel {
+  std::string file;                          ///< where it was read
+  std::string name;                          ///< world name
+  std::shared_ptr<const FieldModel> field;   ///< the field
+  std::shared_ptr<const BallModel> ball;     ///< the ball
+  Vec3 ball_start = Vec3::Zero();            ///< ball start position (z: 0 means resting on the carpet)
+  std::vector<RobotPlacement> robots;        ///< every robot
+  PhysicsModel physics;                      ///< physics settings
+  std::uint64_t seed = 1;                    ///< seed of every random process in the world
+  std::vector<std::filesystem::path> plugin_paths;  ///< extra plugin folders, resolved against the file
+  std::vector<TransportModel> transports;    ///< transports to start
+  std::vector<MaterialPair> material_pairs;  ///< contact table
+  ParamView perception;                      ///< raw `perception:` block (cameras, noise, latency)
+  ParamView radio;                           ///< raw `radio:` block (command latency, loss)
+};
+
+/// Gives the JSON Schema of a plugin's parameter block, or throws std::runtime_error saying why
+/// the plugin is unavailable (not found with the paths searched, failed to load and why).
+using PluginSchemaLookup =
+    std::function<std::string(PluginKind kind, const std::string& plugin_id)>;
+
+/// Loads and validates model files. Every failure is a ModelError naming file:line:column and key.
+class ModelLoader {
+ public:
+  /// schema_dir holds <kind>.schema.json (world, field, ball, robot); plugin_schema may be empty,
+  /// then plugin parameter blocks are not checked.
+  ModelLoader(std::filesystem::path schema_dir, PluginSchemaLookup plugin_schema);
+
+  /// Reads a world file and everything it names (field, ball, robots), resolving relative paths
+  /// against the file that names them.
+  WorldModel LoadWorld(const std::filesystem::path& file) const;
+  /// Reads a field file.
+  std::shared_ptr<const FieldModel> LoadField(const std::filesystem::path& file) const;
+  /// Reads a ball file.
+  std::shared_ptr<const BallModel> LoadBall(const std::filesystem::path& file) const;
+  /// Reads a robot file (checking its plugins' parameter blocks).
+  std::shared_ptr<const RobotModel> LoadRobot(const std::filesystem::path& file) const;
+  /// Reads any model file by its `kind:` and validates it fully (for `ubersim validate`);
+  /// returns the kind.
+  std::string Validate(const std::filesystem::path& file) const;
+
+  /// The installed or source-tree schemas/ folder, found relative to the running executable.
+  static std::filesystem::path DefaultSchemaDir();
+
+ private:
+  struct Impl;
+  std::shared_ptr<const Impl> impl_;
+};
+
+/// Parses a YAML file into a located tree; throws ModelError (missing file, syntax error).
+std::shared_ptr<const detail::ParamNode> ParseYamlFile(const std::filesystem::path& file);
+/// Parses YAML text (file names the source in errors).
+std::shared_ptr<const detail::ParamNode> ParseYamlText(const std::string& text, const std::string& file);
+
+/// Validates `value` against draft-04 JSON Schema text; throws ModelError at the offending value,
+/// naming its key path. `schema_label` names the schema in the message.
+void ValidateAgainstSchema(const ParamView& value, const std::string& schema_json,
+                           const std::string& schema_label);
+
+/// Fills geometry.lines and geometry.arcs from the sizes, as SSL-Vision names them
+/// ("TopTouchLine", "LeftGoalLine", "CenterCircle", …).
+void BuildFieldMarkings(FieldGeometry& geometry);
+
+}  // namespace ubersim::kernel

@@ -1,0 +1,110 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "ubersim/math.hpp"
+
+namespace ubersim {
+inline namespace v1 {
+
+/// The two SSL teams.
+enum class Team : std::uint8_t { kBlue, kYellow };
+
+/// "blue" or "yellow".
+inline const char* ToString(Team t) { return t == Team::kBlue ? "blue" : "yellow"; }
+
+/// Identifies one robot: team and shirt number.
+struct RobotId {
+  Team team = Team::kBlue;  ///< team
+  int id = 0;               ///< robot id (0..15 in SSL)
+  /// Equality on team and id.
+  friend bool operator==(const RobotId&, const RobotId&) = default;
+};
+
+/// What an event is about: the ball or one robot.
+struct Target {
+  bool is_ball = true;   ///< true: the ball; false: `robot`
+  RobotId robot;         ///< the robot, when !is_ball
+  /// Names the ball.
+  static Target Ball() { return Target{}; }
+  /// Names a robot.
+  static Target Robot(RobotId r) { return Target{false, r}; }
+};
+
+/// Position event (the paper's): teleports the ball or a robot. Unset fields stay as they are.
+struct PositionEvent {
+  Target target;                        ///< what to move
+  std::optional<Vec3> position;         ///< new position, m (robots: z ignored, put on carpet)
+  std::optional<double> yaw;            ///< new heading, rad (robots)
+  std::optional<Vec3> velocity;         ///< new linear velocity, m/s
+  std::optional<Vec3> angular_velocity; ///< new angular velocity, rad/s
+  std::optional<bool> present;          ///< robots: false takes it off the field, true puts it back
+};
+
+/// Wheel speeds, rad/s, in the order of the drive's wheels.
+struct WheelSpeedCommand { std::vector<double> wheel_speeds; };
+/// Velocity in the robot frame: forward (x), left (y), m/s; counter-clockwise, rad/s.
+struct LocalVelocityCommand { double forward = 0, left = 0, angular = 0; };
+/// Velocity in the field frame, m/s, and angular velocity, rad/s.
+struct GlobalVelocityCommand { double x = 0, y = 0, angular = 0; };
+/// A robot move command in any of the three forms the SSL simulation protocol has.
+using MoveCommand = std::variant<WheelSpeedCommand, LocalVelocityCommand, GlobalVelocityCommand>;
+
+/// A kick: speed (m/s) and elevation angle (rad; 0 = flat).
+struct KickCommand {
+  double speed = 0.0;  ///< requested ball speed, m/s (the kicker clamps it)
+  double angle = 0.0;  ///< elevation, rad: 0 flat, > 0 chip
+};
+
+/// Command event (the paper's): carries a robot's move/kick/dribble command to its plugins.
+struct CommandEvent {
+  RobotId robot;                          ///< which robot
+  std::optional<MoveCommand> move;        ///< new move command
+  std::optional<KickCommand> kick;        ///< kick now if possible
+  std::optional<double> dribbler_speed;   ///< roller speed, rad/s (0 stops it)
+};
+
+/// State of one object as a query returns it.
+struct ObjectState {
+  bool found = false;       ///< false when the target does not exist
+  bool present = true;      ///< robots: on the field
+  Pose pose;                ///< world pose
+  Twist twist;              ///< world velocity
+};
+
+/// Query event (the paper's): reads an object's pose and velocity back; answered on the
+/// simulation thread after the step, by calling `reply`.
+struct QueryEvent {
+  Target target;                                  ///< what to read
+  std::function<void(const ObjectState&)> reply;  ///< called once with the answer
+};
+
+/// Clock control: pause, resume, single step, speed factor, reset to the world file's state.
+struct ClockEvent {
+  /// What to do.
+  enum class Action { kPause, kResume, kStep, kSetSpeed, kReset };
+  Action action = Action::kPause;  ///< the action
+  double speed_factor = 1.0;       ///< kSetSpeed: sim seconds per wall second (0 = as fast as possible)
+  int steps = 1;                   ///< kStep: how many physics steps
+};
+
+/// Any event a transport or tool can post to the kernel.
+using Event = std::variant<PositionEvent, CommandEvent, QueryEvent, ClockEvent>;
+
+/// Where events go. Post is thread-safe; the kernel applies events at the start of the next step,
+/// on the simulation thread, in the order they were posted.
+class EventSink {
+ public:
+  virtual ~EventSink() = default;
+  /// Queues an event for the next step.
+  virtual void Post(Event event) = 0;
+};
+
+}  // namespace v1
+}  // namespace ubersim

@@ -1,0 +1,20 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <cstdint>
+
+namespace ubersim {
+inline namespace v1 {
+
+/// SDK major version: plugins built against another major are refused.
+inline constexpr std::uint32_t kSdkVersionMajor = 0;
+/// SDK minor version: a plugin needing a newer minor than the kernel's is refused.
+inline constexpr std::uint32_t kSdkVersionMinor = 1;
+/// Version of the binary plugin boundary (descriptor layout, interface vtables).
+inline constexpr std::uint32_t kPluginAbiVersion = 1;
+
+/// The ABI word a plugin exports and the kernel reads before calling anything: abi << 16 | sdk major.
+inline constexpr std::uint32_t kPluginAbiWord = (kPluginAbiVersion << 16) | kSdkVersionMajor;
+
+}  // namespace v1
+}  // namespace ubersim
