@@ -1,0 +1,105 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ubersim/scene.hpp"
+#include "ubersim/kernel/ode_handles.hpp"
+#include "ubersim/kernel/scene_graph.hpp"
+
+namespace ubersim::kernel {
+
+/// How candidate pairs are found before ODE's narrow phase.
+enum class Broadphase {
+  kSceneGraph,     ///< hierarchical bounding spheres over the scene graph (the paper's method)
+  kHash,           ///< ODE's multi-resolution hash space
+  kSweepAndPrune,  ///< ODE's sweep-and-prune space
+};
+
+/// Parses "scene_graph", "hash" or "sap"; throws std::invalid_argument otherwise.
+Broadphase ParseBroadphase(const std::string& name);
+/// The model-file name of a broadphase.
+const char* ToString(Broadphase b);
+
+/// Contact parameters by pair of material names, with a rule for pairs not in the table.
+class MaterialTable {
+ public:
+  /// Sets the surface used when materials `a` and `b` touch (either order).
+  void SetPair(const std::string& a, const std::string& b, const SurfaceMaterial& surface);
+  /// The surface for two touching materials: the table entry when there is one, else the
+  /// combination: mu and mu2 geometric means, bounce and bounce velocity the larger, ERP the
+  /// smaller and CFM the larger of those set, rolling friction and slip the larger.
+  SurfaceMaterial Resolve(const SurfaceMaterial& a, const SurfaceMaterial& b) const;
+  /// Number of explicit pairs.
+  std::size_t size() const { return pairs_.size(); }
+
+ private:
+  std::map<std::pair<std::string, std::string>, SurfaceMaterial> pairs_;
+};
+
+/// Counters of the last Collide() call.
+struct CollisionStats {
+  std::size_t sphere_tests = 0;    ///< bounding-sphere overlap tests (scene-graph broadphase)
+  std::size_t narrow_tests = 0;    ///< dCollide calls
+  std::size_t touching_pairs = 0;  ///< pairs with at least one contact
+  std::size_t contacts = 0;        ///< contact joints created
+};
+
+/// Finds colliding geometry pairs over the scene graph and turns contacts into ODE contact joints
+/// with parameters from the material table, directional friction and rolling resistance; lets
+/// observers see and change each contact first. Never pairs a node with itself, its ancestors
+/// or its descendants, two static geometries, or two geometries of one body.
+class CollisionManager {
+ public:
+  /// Files every geometry of `graph` (and later ones) for the chosen broadphase.
+  CollisionManager(SceneGraph& graph, Broadphase broadphase, int max_contacts_per_pair);
+  ~CollisionManager();
+  CollisionManager(const CollisionManager&) = delete;
+  CollisionManager& operator=(const CollisionManager&) = delete;
+
+  /// Switches the broadphase (files existing geometries into or out of the ODE space).
+  void SetBroadphase(Broadphase broadphase);
+  /// The broadphase in use.
+  Broadphase broadphase() const { return broadphase_; }
+  /// The material-pair table.
+  MaterialTable& materials() { return materials_; }
+
+  /// Calls `f` for every candidate pair the broadphase yields after the exclusion rules, in a
+  /// deterministic order. Bounding spheres are refreshed first.
+  void ForEachCandidatePair(const std::function<void(GeomImpl&, GeomImpl&)>& f);
+  /// Broadphase + narrow phase: every pair that touches now (no joints are created).
+  std::vector<std::pair<GeomImpl*, GeomImpl*>> TouchingPairs();
+  /// Broadphase + narrow phase, creating contact joints for the next physics step.
+  void Collide();
+  /// Removes the contact joints of the last step.
+  void ClearContacts();
+  /// Counters of the last Collide().
+  const CollisionStats& stats() const { return stats_; }
+
+  /// True when the exclusion rules let a and b collide at all.
+  static bool MayCollide(const GeomImpl& a, const GeomImpl& b);
+
+ private:
+  void Narrow(GeomImpl& a, GeomImpl& b);
+  void WithinSubtree(const NodeImpl& node, const std::function<void(GeomImpl&, GeomImpl&)>& f);
+  void NodeVsNode(const NodeImpl& a, const NodeImpl& b,
+                  const std::function<void(GeomImpl&, GeomImpl&)>& f);
+  void GeomVsNode(GeomImpl& g, const BoundingSphere& gb, const NodeImpl& node,
+                  const std::function<void(GeomImpl&, GeomImpl&)>& f);
+
+  SceneGraph& graph_;
+  Broadphase broadphase_;
+  int max_contacts_;
+  MaterialTable materials_;
+  CollisionStats stats_;
+  OdeSpace space_;        // only for the ODE broadphases
+  OdeJointGroup contacts_;
+  std::vector<dContactGeom> scratch_;
+};
+
+}  // namespace ubersim::kernel

@@ -1,0 +1,204 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ubersim/component.hpp"
+#include "ubersim/scene.hpp"
+#include "ubersim/kernel/ode_handles.hpp"
+
+// The scene graph (SG): a tree of nodes that own ODE bodies, geometries and joints. Every module
+// but the collision manager reads or changes the world through it.
+namespace ubersim::kernel {
+
+class NodeImpl;
+class SceneGraph;
+
+/// A rigid body owned by a node.
+class BodyImpl final : public Body {
+ public:
+  BodyImpl(dWorldID world, const BodySpec& spec);
+  const std::string& Name() const override { return name_; }
+  Pose GetPose() const override;
+  void SetPose(const Pose& pose) override;
+  Twist GetTwist() const override;
+  void SetTwist(const Twist& twist) override;
+  Vec3 PointVelocity(const Vec3& world_point) const override;
+  void AddForce(const Vec3& force) override;
+  void AddForceAtPoint(const Vec3& force, const Vec3& world_point) override;
+  void AddTorque(const Vec3& torque) override;
+  void ApplyImpulse(const Vec3& impulse) override;
+  double Mass() const override { return mass_; }
+  void Wake() override { dBodyEnable(body_.get()); }
+
+  /// The ODE body.
+  dBodyID id() const { return body_.get(); }
+
+ private:
+  std::string name_;
+  double mass_;
+  OdeBody body_;
+};
+
+/// A geometry owned by a node, with its surface, optional directional friction and observers.
+class GeomImpl final : public Geom {
+ public:
+  GeomImpl(NodeImpl& owner, const GeomSpec& spec, BodyImpl* body);
+  const std::string& Name() const override { return name_; }
+  Body* AttachedBody() const override { return body_; }
+  SceneNode& Owner() const override;
+  const Shape& GetShape() const override { return shape_; }
+  const SurfaceMaterial& Material() const override { return material_; }
+  void SetMaterial(const SurfaceMaterial& material) override { material_ = material; }
+  Pose GetPose() const override;
+  void SetCollides(bool collides) override { collides_ = collides; }
+
+  dGeomID id() const { return geom_.get(); }                   ///< the ODE geometry
+  BodyImpl* body() const { return body_; }                     ///< attached body or null
+  NodeImpl& owner() const { return owner_; }                   ///< owning node
+  bool collides() const { return collides_; }                  ///< takes part in collisions
+  /// Directional-friction axis in the body frame, if any.
+  const std::optional<Vec3>& friction_axis() const { return friction_axis_; }
+  /// World bounding sphere now (infinite for planes).
+  BoundingSphere WorldBounds() const;
+  /// Adds a contact observer.
+  void AddObserver(ContactHandler handler) { observers_.push_back(std::move(handler)); }
+  /// Removes every contact observer.
+  void ClearObservers() { observers_.clear(); }
+  /// Contact observers, in the order added.
+  const std::vector<ContactHandler>& observers() const { return observers_; }
+  /// Marks the geometry as the ball (contacts report other_is_ball).
+  void set_is_ball(bool b) { is_ball_ = b; }
+  bool is_ball() const { return is_ball_; }  ///< this is the ball
+
+ private:
+  NodeImpl& owner_;
+  std::string name_;
+  Shape shape_;
+  SurfaceMaterial material_;
+  std::optional<Vec3> friction_axis_;
+  BodyImpl* body_;
+  bool collides_;
+  bool is_ball_ = false;
+  double bounding_radius_;
+  std::vector<ContactHandler> observers_;
+  std::vector<dReal> mesh_vertices_;
+  std::vector<dTriIndex> mesh_indices_;
+  OdeTriMeshData mesh_data_;
+  OdeGeom geom_;
+};
+
+/// A joint owned by a node; hinge and slider motors use ODE's built-in joint motor.
+class JointImpl final : public Joint {
+ public:
+  JointImpl(dWorldID world, const JointSpec& spec);
+  const std::string& Name() const override { return name_; }
+  JointKind Kind() const override { return kind_; }
+  void SetMotor(double velocity, double max_effort) override;
+  double Position() const override;
+  double Rate() const override;
+  Vec3 Axis() const override;
+  Vec3 LastTorque() const override;
+
+  dJointID id() const { return joint_.get(); }  ///< the ODE joint
+
+ private:
+  std::string name_;
+  JointKind kind_;
+  dJointFeedback feedback_{};
+  OdeJoint joint_;
+};
+
+/// A node of the tree. Owns its children, bodies, geometries and joints.
+class NodeImpl final : public SceneNode {
+ public:
+  NodeImpl(SceneGraph& graph, NodeImpl* parent, std::string name);
+  ~NodeImpl() override;
+
+  const std::string& Name() const override { return name_; }
+  std::string Path() const override;
+  SceneNode* Parent() const override { return parent_; }
+  SceneNode& AddChild(std::string_view name) override;
+  SceneNode* FindChild(std::string_view name) const override;
+  Body& AddBody(const BodySpec& spec) override;
+  Geom& AddGeom(const GeomSpec& spec, Body* body) override;
+  Joint& AddJoint(const JointSpec& spec) override;
+  Body* FindBody(std::string_view name) const override;
+  Geom* FindGeom(std::string_view name) const override;
+  Joint* FindJoint(std::string_view name) const override;
+  BoundingSphere Bounds() const override { return bounds_; }
+
+  /// Child nodes in insertion order.
+  const std::vector<std::unique_ptr<NodeImpl>>& children() const { return children_; }
+  /// Own geometries in insertion order.
+  const std::vector<std::unique_ptr<GeomImpl>>& geoms() const { return geoms_; }
+  /// Own bodies in insertion order.
+  const std::vector<std::unique_ptr<BodyImpl>>& bodies() const { return bodies_; }
+  /// Own joints in insertion order.
+  const std::vector<std::unique_ptr<JointImpl>>& joints() const { return joints_; }
+  /// Typed child lookup.
+  NodeImpl* FindChildNode(std::string_view name) const;
+  /// Typed parent.
+  NodeImpl* parent() const { return parent_; }
+  /// Graph this node belongs to.
+  SceneGraph& graph() const { return graph_; }
+  /// Recomputes this subtree's bounding spheres (children first); returns this node's.
+  const BoundingSphere& UpdateBounds();
+  /// Calls f on every body of the subtree, depth first, in insertion order.
+  void ForEachBody(const std::function<void(BodyImpl&)>& f) const;
+  /// Calls f on every geometry of the subtree, depth first, in insertion order.
+  void ForEachGeom(const std::function<void(GeomImpl&)>& f) const;
+
+ private:
+  SceneGraph& graph_;
+  NodeImpl* parent_;
+  std::string name_;
+  BoundingSphere bounds_;
+  // Declaration order = reverse destruction order: joints go first, then geoms, bodies, children.
+  std::vector<std::unique_ptr<NodeImpl>> children_;
+  std::vector<std::unique_ptr<BodyImpl>> bodies_;
+  std::vector<std::unique_ptr<GeomImpl>> geoms_;
+  std::vector<std::unique_ptr<JointImpl>> joints_;
+};
+
+/// The tree, rooted at an unnamed node, over one ODE world.
+class SceneGraph {
+ public:
+  explicit SceneGraph(dWorldID world);
+  ~SceneGraph();
+  SceneGraph(const SceneGraph&) = delete;
+  SceneGraph& operator=(const SceneGraph&) = delete;
+
+  /// The root node (path "").
+  NodeImpl& Root() { return *root_; }
+  /// The root node (path "").
+  const NodeImpl& Root() const { return *root_; }
+  /// The node at a slash-separated path, or nullptr.
+  NodeImpl* Find(std::string_view path) const;
+  /// Recomputes every bounding sphere.
+  void UpdateBounds() { root_->UpdateBounds(); }
+  /// The ODE world the bodies live in.
+  dWorldID world() const { return world_; }
+  /// Called for each geometry as it is created (the collision manager files it).
+  void SetGeomListener(std::function<void(GeomImpl&)> on_added,
+                       std::function<void(GeomImpl&)> on_removed);
+  /// Listener hooks (used by GeomImpl).
+  void NotifyGeomAdded(GeomImpl& g) { if (on_geom_added_) on_geom_added_(g); }
+  void NotifyGeomRemoved(GeomImpl& g) { if (on_geom_removed_) on_geom_removed_(g); }
+
+ private:
+  dWorldID world_;
+  std::function<void(GeomImpl&)> on_geom_added_;
+  std::function<void(GeomImpl&)> on_geom_removed_;
+  std::unique_ptr<NodeImpl> root_;
+};
+
+/// Converts between Eigen and ODE representations.
+inline Vec3 ToVec3(const dReal* v) { return Vec3(v[0], v[1], v[2]); }
+
+}  // namespace ubersim::kernel

@@ -1,0 +1,127 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ubersim/events.hpp"
+#include "ubersim/log.hpp"
+#include "ubersim/world_state.hpp"
+#include "ubersim/kernel/clock.hpp"
+#include "ubersim/kernel/collision.hpp"
+#include "ubersim/kernel/event_queue.hpp"
+#include "ubersim/kernel/model.hpp"
+#include "ubersim/kernel/ode_handles.hpp"
+#include "ubersim/kernel/plugin_registry.hpp"
+#include "ubersim/kernel/scene_graph.hpp"
+
+namespace ubersim::kernel {
+
+class Robot;
+class TransportHost;
+struct RobotServices;
+
+/// Where a step's wall time went, accumulated since the start, ns.
+struct StepTimings {
+  std::int64_t events_ns = 0;      ///< applying events
+  std::int64_t plugins_ns = 0;     ///< component PreStep/PostStep
+  std::int64_t collision_ns = 0;   ///< broadphase + narrow phase + contact joints
+  std::int64_t physics_ns = 0;     ///< dWorldQuickStep
+  std::int64_t transports_ns = 0;  ///< Poll + Publish
+};
+
+/// Counters of events the world refused (with a log line each).
+struct EventCounters {
+  std::int64_t applied = 0;   ///< events applied
+  std::int64_t rejected = 0;  ///< unknown robot, non-finite values, …
+};
+
+/// One simulated world: ODE world, scene graph, collision manager, field, ball, robots with
+/// their plugins, transports, events and the clock. Deterministic: the same model, seed and
+/// events give bit-identical states.
+class World {
+ public:
+  /// Builds everything the model describes, loading plugins through `registry`. Throws
+  /// PluginLoadError or std::runtime_error naming the plugin, robot and reason.
+  /// `start_transports` false builds a world without network (tests, batch).
+  World(const WorldModel& model, PluginRegistry& registry, Log& log, bool start_transports = true);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  /// One physics step: apply queued events, components' PreStep, collide, QuickStep, PostStep,
+  /// answer queries, publish to transports.
+  void Step();
+  /// Applies queued events and answers queries without stepping (while paused).
+  void ProcessEvents();
+  /// Puts everything back where the world file has it; the clock restarts at 0.
+  void Reset();
+
+  /// Where to post events (thread-safe).
+  EventSink& events() { return events_; }
+  /// Pause, speed, single-step and reset requests from clock events.
+  ClockControl& clock_control() { return clock_control_; }
+  /// Simulated time and step count.
+  const SimClock& clock() const { return clock_; }
+  /// Ground truth now.
+  WorldSnapshot Snapshot() const;
+  /// A hash of every body's position, orientation and velocities, bit for bit.
+  std::uint64_t StateHash() const;
+
+  /// The model the world was built from.
+  const WorldModel& model() const { return model_; }
+  /// The scene graph.
+  SceneGraph& scene() { return *scene_; }
+  /// The collision manager.
+  CollisionManager& collision() { return *collision_; }
+  /// The ball body.
+  BodyImpl& ball() { return *ball_; }
+  /// Number of robots.
+  std::size_t robot_count() const { return robots_.size(); }
+  /// The ODE world.
+  dWorldID ode_world() const { return world_.get(); }
+  /// Accumulated time split.
+  const StepTimings& timings() const { return timings_; }
+  /// Event counters.
+  const EventCounters& event_counters() const { return event_counters_; }
+  /// "plugin: endpoint" of every running transport.
+  std::vector<std::string> TransportEndpoints() const;
+
+ private:
+  void Build();
+  void ApplyEvents(bool stepping);
+  void Apply(const PositionEvent& e);
+  void Apply(const CommandEvent& e);
+  void Apply(const ClockEvent& e);
+  ObjectState Query(const Target& t) const;
+  Robot* FindRobot(const RobotId& id) const;
+
+  WorldModel model_;
+  PluginRegistry& registry_;
+  Log& log_;
+  bool start_transports_;
+  OdeLibrary ode_;
+  // Declaration order is teardown order reversed: transports stop first, robots (and their
+  // plugin libraries' objects) go before the scene, the scene before the collision space, and
+  // everything before the ODE world.
+  OdeWorld world_;
+  std::unique_ptr<SceneGraph> scene_;
+  std::unique_ptr<CollisionManager> collision_;
+  BodyImpl* ball_ = nullptr;
+  std::vector<std::unique_ptr<Robot>> robots_;
+  std::vector<std::unique_ptr<TransportHost>> transports_;
+  FieldGeometry field_geometry_;
+  EventQueue events_;
+  std::vector<QueryEvent> pending_queries_;
+  ClockControl clock_control_;
+  SimClock clock_;
+  unsigned long ode_random_seed_;
+  std::int64_t sim_time_ns_ = 0;
+  std::unique_ptr<RobotServices> robot_services_holder_;
+  StepTimings timings_;
+  EventCounters event_counters_;
+};
+
+}  // namespace ubersim::kernel

@@ -1,0 +1,287 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ubersim/kernel/collision.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ubersim::kernel {
+namespace {
+
+bool IsAncestorOrSelf(const NodeImpl* maybe_ancestor, const NodeImpl* node) {
+  for (const NodeImpl* n = node; n; n = n->parent()) {
+    if (n == maybe_ancestor) return true;
+  }
+  return false;
+}
+
+double Mu2(const SurfaceMaterial& m) { return m.mu2 < 0 ? m.mu : m.mu2; }
+
+double GeometricMean(double a, double b) {
+  if (std::isinf(a) && std::isinf(b)) return a;
+  if (std::isinf(a)) return b;  // an infinite-friction surface takes the other's value
+  if (std::isinf(b)) return a;
+  return std::sqrt(std::max(0.0, a) * std::max(0.0, b));
+}
+
+// Combines an optional (negative = unset) parameter, picking with `pick` when both are set.
+template <typename Pick>
+double CombineOptional(double a, double b, Pick pick) {
+  if (a < 0) return b;
+  if (b < 0) return a;
+  return pick(a, b);
+}
+
+struct SpaceCallbackData {
+  const std::function<void(GeomImpl&, GeomImpl&)>* f;
+};
+
+void SpaceNearCallback(void* data, dGeomID o1, dGeomID o2) {
+  auto* a = static_cast<GeomImpl*>(dGeomGetData(o1));
+  auto* b = static_cast<GeomImpl*>(dGeomGetData(o2));
+  if (!a || !b || !CollisionManager::MayCollide(*a, *b)) return;
+  (*static_cast<SpaceCallbackData*>(data)->f)(*a, *b);
+}
+
+}  // namespace
+
+Broadphase ParseBroadphase(const std::string& name) {
+  if (name == "scene_graph") return Broadphase::kSceneGraph;
+  if (name == "hash") return Broadphase::kHash;
+  if (name == "sap") return Broadphase::kSweepAndPrune;
+  throw std::invalid_argument("unknown broadphase '" + name + "' (scene_graph, hash, sap)");
+}
+
+const char* ToString(Broadphase b) {
+  switch (b) {
+    case Broadphase::kSceneGraph: return "scene_graph";
+    case Broadphase::kHash: return "hash";
+    case Broadphase::kSweepAndPrune: return "sap";
+  }
+  return "unknown";
+}
+
+// ---------------------------------------------------------------------------------------------
+// MaterialTable
+
+void MaterialTable::SetPair(const std::string& a, const std::string& b,
+                            const SurfaceMaterial& surface) {
+  SurfaceMaterial s = surface;
+  s.name = a < b ? a + "|" + b : b + "|" + a;
+  pairs_[std::minmax(a, b)] = s;
+}
+
+SurfaceMaterial MaterialTable::Resolve(const SurfaceMaterial& a, const SurfaceMaterial& b) const {
+  if (!pairs_.empty()) {
+    const auto it = pairs_.find(std::minmax(a.name, b.name));
+    if (it != pairs_.end()) return it->second;
+  }
+  SurfaceMaterial s;
+  s.name = a.name < b.name ? a.name + "|" + b.name : b.name + "|" + a.name;
+  s.mu = GeometricMean(a.mu, b.mu);
+  s.mu2 = GeometricMean(Mu2(a), Mu2(b));
+  s.bounce = std::max(a.bounce, b.bounce);
+  s.bounce_velocity = std::max(a.bounce_velocity, b.bounce_velocity);
+  s.soft_erp = CombineOptional(a.soft_erp, b.soft_erp, [](double x, double y) { return std::min(x, y); });
+  s.soft_cfm = CombineOptional(a.soft_cfm, b.soft_cfm, [](double x, double y) { return std::max(x, y); });
+  s.rolling_friction = std::max(a.rolling_friction, b.rolling_friction);
+  s.slip = std::max(a.slip, b.slip);
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// CollisionManager
+
+CollisionManager::CollisionManager(SceneGraph& graph, Broadphase broadphase, int max_contacts)
+    : graph_(graph),
+      broadphase_(Broadphase::kSceneGraph),
+      max_contacts_(std::clamp(max_contacts, 1, 64)),
+      contacts_(dJointGroupCreate(0)),
+      scratch_(static_cast<std::size_t>(max_contacts_)) {
+  graph_.SetGeomListener(
+      [this](GeomImpl& g) {
+        if (space_) dSpaceAdd(space_.get(), g.id());
+      },
+      nullptr);
+  SetBroadphase(broadphase);
+}
+
+CollisionManager::~CollisionManager() {
+  // Geometries outlive us (the scene graph owns them): take them out of our space first.
+  if (space_) {
+    graph_.Root().ForEachGeom([this](GeomImpl& g) {
+      if (dGeomGetSpace(g.id()) == space_.get()) dSpaceRemove(space_.get(), g.id());
+    });
+  }
+  graph_.SetGeomListener(nullptr, nullptr);
+}
+
+void CollisionManager::SetBroadphase(Broadphase broadphase) {
+  if (space_) {
+    graph_.Root().ForEachGeom([this](GeomImpl& g) {
+      if (dGeomGetSpace(g.id()) == space_.get()) dSpaceRemove(space_.get(), g.id());
+    });
+    space_.reset();
+  }
+  broadphase_ = broadphase;
+  if (broadphase == Broadphase::kHash) {
+    space_.reset(dHashSpaceCreate(nullptr));
+    // Cells from 2^-6 m (about a ball) to 2^4 m (a wall).
+    dHashSpaceSetLevels(space_.get(), -6, 4);
+  } else if (broadphase == Broadphase::kSweepAndPrune) {
+    space_.reset(dSweepAndPruneSpaceCreate(nullptr, dSAP_AXES_XYZ));
+  }
+  if (space_) {
+    dSpaceSetCleanup(space_.get(), 0);  // the scene graph owns the geometries
+    graph_.Root().ForEachGeom([this](GeomImpl& g) { dSpaceAdd(space_.get(), g.id()); });
+  }
+}
+
+bool CollisionManager::MayCollide(const GeomImpl& a, const GeomImpl& b) {
+  if (&a == &b || !a.collides() || !b.collides()) return false;
+  if (!a.body() && !b.body()) return false;  // two static geometries never move apart
+  if (a.body() == b.body()) return false;
+  const NodeImpl* na = &a.owner();
+  const NodeImpl* nb = &b.owner();
+  return !IsAncestorOrSelf(na, nb) && !IsAncestorOrSelf(nb, na);
+}
+
+void CollisionManager::ForEachCandidatePair(const std::function<void(GeomImpl&, GeomImpl&)>& f) {
+  if (broadphase_ == Broadphase::kSceneGraph) {
+    graph_.UpdateBounds();
+    WithinSubtree(graph_.Root(), f);
+    return;
+  }
+  SpaceCallbackData data{&f};
+  dSpaceCollide(space_.get(), &data, &SpaceNearCallback);
+}
+
+// All pairs inside one subtree: within each child, and between every two children. A node's own
+// geometries are never paired with its descendants (ancestor rule) nor with each other.
+void CollisionManager::WithinSubtree(const NodeImpl& node,
+                                     const std::function<void(GeomImpl&, GeomImpl&)>& f) {
+  const auto& children = node.children();
+  for (const auto& c : children) WithinSubtree(*c, f);
+  for (std::size_t i = 0; i < children.size(); ++i) {
+    for (std::size_t j = i + 1; j < children.size(); ++j) NodeVsNode(*children[i], *children[j], f);
+  }
+}
+
+// Two disjoint subtrees: prune when their spheres miss, else descend into both.
+void CollisionManager::NodeVsNode(const NodeImpl& a, const NodeImpl& b,
+                                  const std::function<void(GeomImpl&, GeomImpl&)>& f) {
+  ++stats_.sphere_tests;
+  if (!a.Bounds().Overlaps(b.Bounds())) return;
+  for (const auto& g : a.geoms()) {
+    if (!g->collides()) continue;
+    GeomVsNode(*g, g->WorldBounds(), b, f);
+  }
+  for (const auto& c : a.children()) NodeVsNode(*c, b, f);
+}
+
+void CollisionManager::GeomVsNode(GeomImpl& g, const BoundingSphere& gb, const NodeImpl& node,
+                                  const std::function<void(GeomImpl&, GeomImpl&)>& f) {
+  ++stats_.sphere_tests;
+  if (!gb.Overlaps(node.Bounds())) return;
+  for (const auto& h : node.geoms()) {
+    if (!h->collides()) continue;
+    if (!g.body() && !h->body()) continue;
+    if (g.body() == h->body()) continue;
+    ++stats_.sphere_tests;
+    if (gb.Overlaps(h->WorldBounds())) f(g, *h);
+  }
+  for (const auto& c : node.children()) GeomVsNode(g, gb, *c, f);
+}
+
+std::vector<std::pair<GeomImpl*, GeomImpl*>> CollisionManager::TouchingPairs() {
+  std::vector<std::pair<GeomImpl*, GeomImpl*>> pairs;
+  ForEachCandidatePair([&](GeomImpl& a, GeomImpl& b) {
+    if (dCollide(a.id(), b.id(), max_contacts_, scratch_.data(), sizeof(dContactGeom)) > 0) {
+      pairs.emplace_back(&a, &b);
+    }
+  });
+  return pairs;
+}
+
+void CollisionManager::Collide() {
+  stats_ = CollisionStats{};
+  ForEachCandidatePair([this](GeomImpl& a, GeomImpl& b) { Narrow(a, b); });
+}
+
+void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }
+
+void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
+  ++stats_.narrow_tests;
+  const int n = dCollide(a.id(), b.id(), max_contacts_, scratch_.data(), sizeof(dContactGeom));
+  if (n <= 0) return;
+  ++stats_.touching_pairs;
+  const SurfaceMaterial pair_surface = materials_.Resolve(a.Material(), b.Material());
+  // The geometry with directional friction (an omni wheel) decides the friction direction.
+  const GeomImpl* directional = a.friction_axis() ? &a : (b.friction_axis() ? &b : nullptr);
+  dWorldID world = graph_.world();
+  for (int i = 0; i < n; ++i) {
+    const dContactGeom& cg = scratch_[static_cast<std::size_t>(i)];
+    SurfaceMaterial surface = pair_surface;
+    bool accept = true;
+    const Vec3 position = ToVec3(cg.pos);
+    const Vec3 normal = ToVec3(cg.normal);  // points out of b (g2) into a (g1)
+    for (const auto& h : a.observers()) {
+      h(Contact{&a, &b, b.is_ball(), position, normal, cg.depth}, surface, accept);
+    }
+    for (const auto& h : b.observers()) {
+      h(Contact{&b, &a, a.is_ball(), position, -normal, cg.depth}, surface, accept);
+    }
+    if (!accept) continue;
+
+    dContact c{};
+    c.geom = cg;
+    int mode = dContactApprox1;
+    c.surface.mu = surface.mu;
+    if (directional) {
+      const Quat q = directional->body() ? directional->body()->GetPose().orientation : Quat::Identity();
+      Vec3 dir = q * *directional->friction_axis();
+      dir -= normal * normal.dot(dir);  // project onto the contact plane
+      if (dir.norm() > 1e-6) {
+        dir.normalize();
+        mode |= dContactMu2 | dContactFDir1;
+        c.fdir1[0] = dir.x();
+        c.fdir1[1] = dir.y();
+        c.fdir1[2] = dir.z();
+        c.surface.mu2 = Mu2(surface);
+      }
+    } else if (surface.mu2 >= 0 && surface.mu2 != surface.mu) {
+      mode |= dContactMu2;
+      c.surface.mu2 = surface.mu2;
+    }
+    if (surface.bounce > 0) {
+      mode |= dContactBounce;
+      c.surface.bounce = surface.bounce;
+      c.surface.bounce_vel = surface.bounce_velocity;
+    }
+    if (surface.soft_erp >= 0) {
+      mode |= dContactSoftERP;
+      c.surface.soft_erp = surface.soft_erp;
+    }
+    if (surface.soft_cfm >= 0) {
+      mode |= dContactSoftCFM;
+      c.surface.soft_cfm = surface.soft_cfm;
+    }
+    if (surface.rolling_friction > 0) {
+      mode |= dContactRolling;
+      c.surface.rho = surface.rolling_friction;
+      c.surface.rho2 = surface.rolling_friction;
+      c.surface.rhoN = surface.rolling_friction;
+    }
+    if (surface.slip > 0) {
+      mode |= dContactSlip1 | dContactSlip2;
+      c.surface.slip1 = surface.slip;
+      c.surface.slip2 = surface.slip;
+    }
+    c.surface.mode = mode;
+    dJointID j = dJointCreateContact(world, contacts_.get(), &c);
+    dJointAttach(j, a.body() ? a.body()->id() : nullptr, b.body() ? b.body()->id() : nullptr);
+    ++stats_.contacts;
+  }
+}
+
+}  // namespace ubersim::kernel

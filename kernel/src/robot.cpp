@@ -1,0 +1,220 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "robot.hpp"
+
+#include <cmath>
+#include <exception>
+
+#include "ubersim/error.hpp"
+
+namespace ubersim::kernel {
+
+/// The RobotContext a component sees.
+class Robot::Context final : public RobotContext {
+ public:
+  Context(Robot& robot, const ComponentModel& model, Log& log, const RobotServices& services)
+      : robot_(robot),
+        params_(model.params),
+        log_(log, robot.node().Path() + " " + model.plugin),
+        services_(services) {}
+
+  RobotId Id() const override { return robot_.id_; }
+  SceneNode& Node() override { return *robot_.node_; }
+  Body& Chassis() override { return *robot_.chassis_; }
+  const RobotBodyInfo& BodyInfo() const override { return robot_.model_->body; }
+  const ParamView& Params() const override { return params_; }
+  Log& Logger() override { return log_; }
+  double SimTime() const override { return 1e-9 * static_cast<double>(*services_.sim_time_ns); }
+  Body* Ball() override { return services_.ball; }
+  double BallRadius() const override { return services_.ball_radius; }
+  Vec3 Gravity() const override { return services_.gravity; }
+  void ObserveContacts(Geom& own, ContactHandler handler) override {
+    auto* g = dynamic_cast<GeomImpl*>(&own);
+    bool mine = false;
+    for (const NodeImpl* n = g ? &g->owner() : nullptr; n; n = n->parent()) {
+      if (n == robot_.node_) mine = true;
+    }
+    if (!mine) {
+      throw PluginError("ObserveContacts: geometry '" + own.Name() +
+                        "' does not belong to robot " + robot_.node_->Path());
+    }
+    g->AddObserver(std::move(handler));
+  }
+  PrefixedLog& log() { return log_; }
+
+ private:
+  Robot& robot_;
+  ParamView params_;
+  PrefixedLog log_;
+  const RobotServices& services_;
+};
+
+/// One plugin instance of the robot with its context; the context outlives the component.
+struct Robot::Part {
+  std::string plugin;
+  PluginKind kind;
+  std::unique_ptr<Context> context;
+  std::shared_ptr<Component> component;
+  bool failed = false;
+};
+
+Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistry& registry,
+             Log& log, const RobotServices& services)
+    : id_(placement.id), model_(placement.model), present_(placement.present) {
+  const RobotModel& m = *model_;
+  node_ = static_cast<NodeImpl*>(&team_node.AddChild(std::to_string(id_.id)));
+  const RobotBodyInfo& b = m.body;
+  const double length = b.height - b.ground_clearance;
+  rest_height_ = b.ground_clearance + 0.5 * length;
+
+  BodySpec chassis;
+  chassis.name = "chassis";
+  chassis.mass = MassSpec::Solid(Shape::Cylinder(b.radius, length), b.mass);
+  chassis.pose = Pose::FromYaw(Vec3(placement.x, placement.y, rest_height_), placement.yaw);
+  chassis_ = static_cast<BodyImpl*>(&node_->AddBody(chassis));
+  GeomSpec shell;
+  shell.name = "shell";
+  shell.shape = Shape::Cylinder(b.radius, length);
+  shell.material = m.surface;
+  node_->AddGeom(shell, chassis_);
+
+  auto add = [&](const std::optional<ComponentModel>& cm, PluginKind kind) {
+    if (!cm) return;
+    auto part = std::make_unique<Part>();
+    part->plugin = cm->plugin;
+    part->kind = kind;
+    part->context = std::make_unique<Context>(*this, *cm, log, services);
+    switch (kind) {
+      case PluginKind::kDrive: {
+        auto d = registry.CreateDrive(cm->plugin);
+        drive_ = d.get();
+        part->component = std::move(d);
+        break;
+      }
+      case PluginKind::kDribbler: {
+        auto d = registry.CreateDribbler(cm->plugin);
+        dribbler_ = d.get();
+        part->component = std::move(d);
+        break;
+      }
+      case PluginKind::kKicker: {
+        auto k = registry.CreateKicker(cm->plugin);
+        kicker_ = k.get();
+        part->component = std::move(k);
+        break;
+      }
+      case PluginKind::kTransport: break;
+    }
+    try {
+      part->component->Configure(*part->context);
+    } catch (const std::exception& e) {
+      throw PluginError(node_->Path() + " (" + m.file + "): " + ToString(kind) + " plugin '" +
+                        cm->plugin + "' failed to configure: " + e.what());
+    }
+    parts_.push_back(std::move(part));
+  };
+  add(m.drive, PluginKind::kDrive);
+  add(m.dribbler, PluginKind::kDribbler);
+  add(m.kicker, PluginKind::kKicker);
+  if (!present_) {
+    present_ = true;
+    SetPresent(false);
+  }
+}
+
+Robot::~Robot() {
+  // Observers are plugin code: drop them while the plugin libraries are still loaded.
+  node_->ForEachGeom([](GeomImpl& g) { g.ClearObservers(); });
+  parts_.clear();
+}
+
+void Robot::RunPhase(bool pre, const StepInfo& step) {
+  if (!present_) return;
+  for (auto& p : parts_) {
+    if (p->failed) continue;
+    try {
+      if (pre) {
+        p->component->PreStep(step);
+      } else {
+        p->component->PostStep(step);
+      }
+    } catch (const std::exception& e) {
+      p->failed = true;
+      p->context->log().Error(std::string(pre ? "PreStep" : "PostStep") + " threw: " + e.what() +
+                              "; this " + ToString(p->kind) + " is switched off");
+    }
+  }
+}
+
+void Robot::PreStep(const StepInfo& step) { RunPhase(true, step); }
+void Robot::PostStep(const StepInfo& step) { RunPhase(false, step); }
+
+bool Robot::Command(const CommandEvent& e, std::string& why) {
+  bool ok = true;
+  auto guarded = [&](Component* c, const char* what, auto&& f) {
+    if (!c) {
+      why += std::string(why.empty() ? "" : "; ") + "robot has no " + what;
+      ok = false;
+      return;
+    }
+    try {
+      f();
+    } catch (const std::exception& ex) {
+      why += std::string(why.empty() ? "" : "; ") + what + " refused the command: " + ex.what();
+      ok = false;
+    }
+  };
+  if (e.move) guarded(drive_, "drive", [&] { drive_->SetCommand(*e.move); });
+  if (e.dribbler_speed) guarded(dribbler_, "dribbler", [&] { dribbler_->SetSpeed(*e.dribbler_speed); });
+  if (e.kick) guarded(kicker_, "kicker", [&] { kicker_->Kick(*e.kick); });
+  return ok;
+}
+
+void Robot::Teleport(double x, double y, double yaw) {
+  const Pose old_chassis = chassis_->GetPose();
+  const Pose new_chassis = Pose::FromYaw(Vec3(x, y, rest_height_), yaw);
+  const Quat dq = (new_chassis.orientation * old_chassis.orientation.conjugate()).normalized();
+  node_->ForEachBody([&](BodyImpl& body) {
+    const Pose p = body.GetPose();
+    const Vec3 rel = p.position - old_chassis.position;
+    body.SetPose(Pose{new_chassis.position + dq * rel, (dq * p.orientation).normalized()});
+    const Twist t = body.GetTwist();
+    body.SetTwist(Twist{dq * t.linear, dq * t.angular});
+  });
+}
+
+void Robot::SetVelocity(const Vec3& linear, const Vec3& angular) {
+  const Vec3 origin = chassis_->GetPose().position;
+  node_->ForEachBody([&](BodyImpl& body) {
+    const Vec3 r = body.GetPose().position - origin;
+    body.SetTwist(Twist{linear + angular.cross(r), angular});
+  });
+}
+
+void Robot::SetPresent(bool present) {
+  if (present == present_) return;
+  present_ = present;
+  node_->ForEachGeom([&](GeomImpl& g) { g.SetCollides(present); });
+  node_->ForEachBody([&](BodyImpl& body) {
+    if (present) {
+      dBodyEnable(body.id());
+    } else {
+      body.SetTwist(Twist{});
+      dBodyDisable(body.id());
+    }
+  });
+}
+
+RobotState Robot::State() const {
+  RobotState s;
+  s.id = id_;
+  s.present = present_;
+  s.pose = chassis_->GetPose();
+  s.twist = chassis_->GetTwist();
+  s.radius = model_->body.radius;
+  s.height = model_->body.height;
+  if (dribbler_) s.dribbler_ball_contact = dribbler_->TouchesBall();
+  if (kicker_) s.kicker_ready = kicker_->Ready();
+  return s;
+}
+
+}  // namespace ubersim::kernel

@@ -1,0 +1,427 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ubersim/kernel/world.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <type_traits>
+
+#include "ubersim/error.hpp"
+#include "ubersim/kernel/field_builder.hpp"
+#include "ubersim/kernel/logging.hpp"
+#include "robot.hpp"
+
+namespace ubersim::kernel {
+namespace {
+
+using SteadyClock = std::chrono::steady_clock;
+
+std::int64_t ElapsedNs(SteadyClock::time_point since) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(SteadyClock::now() - since).count();
+}
+
+bool Finite(const std::optional<Vec3>& v) { return !v || v->allFinite(); }
+
+// FNV-1a over raw bytes: equal hashes mean bit-identical doubles.
+void HashBytes(std::uint64_t& h, const void* data, std::size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ULL;
+  }
+}
+
+std::string Describe(const RobotId& id) {
+  return std::string(ToString(id.team)) + " " + std::to_string(id.id);
+}
+
+}  // namespace
+
+/// A running transport with its context.
+class TransportHost final : public TransportContext {
+ public:
+  TransportHost(const TransportModel& model, World& world, Log& log, EventSink& events,
+                const FieldGeometry& field, const std::string& world_name)
+      : plugin_(model.plugin),
+        params_(model.params),
+        log_(log, "transport " + model.plugin),
+        events_(events),
+        field_(field),
+        world_name_(world_name) {
+    (void)world;
+  }
+  ~TransportHost() override { Stop(); }
+
+  const ParamView& Params() const override { return params_; }
+  Log& Logger() override { return log_; }
+  EventSink& Events() override { return events_; }
+  const FieldGeometry& Field() const override { return field_; }
+  const std::string& WorldName() const override { return world_name_; }
+
+  void Start(std::shared_ptr<Transport> t) {
+    transport_ = std::move(t);
+    try {
+      transport_->Start(*this);
+      started_ = true;
+    } catch (const std::exception& e) {
+      throw PluginError("transport plugin '" + plugin_ + "' failed to start: " + e.what());
+    }
+  }
+  void Stop() {
+    if (started_) {
+      started_ = false;
+      try {
+        transport_->Stop();
+      } catch (const std::exception& e) {
+        log_.Error(std::string("Stop threw: ") + e.what());
+      }
+    }
+    transport_.reset();
+  }
+  // Runs f against the transport; a throwing transport is reported once and switched off.
+  template <typename F>
+  void Guarded(const char* phase, F&& f) {
+    if (!started_ || failed_) return;
+    try {
+      f(*transport_);
+    } catch (const std::exception& e) {
+      failed_ = true;
+      log_.Error(std::string(phase) + " threw: " + e.what() + "; this transport is switched off");
+    }
+  }
+  std::string Endpoint() const {
+    return plugin_ + (transport_ ? ": " + transport_->Endpoint() : std::string());
+  }
+
+ private:
+  std::string plugin_;
+  ParamView params_;
+  PrefixedLog log_;
+  EventSink& events_;
+  const FieldGeometry& field_;
+  const std::string& world_name_;
+  std::shared_ptr<Transport> transport_;
+  bool started_ = false;
+  bool failed_ = false;
+};
+
+World::World(const WorldModel& model, PluginRegistry& registry, Log& log, bool start_transports)
+    : model_(model),
+      registry_(registry),
+      log_(log),
+      start_transports_(start_transports),
+      clock_(model.physics.step),
+      ode_random_seed_(static_cast<unsigned long>(model.seed)) {
+  if (!model_.field || !model_.ball) throw std::runtime_error("world has no field or ball model");
+  field_geometry_ = model_.field->geometry;
+  Build();
+  if (start_transports_) {
+    for (const TransportModel& tm : model_.transports) {
+      auto host = std::make_unique<TransportHost>(tm, *this, log_, events_, field_geometry_,
+                                                  model_.name);
+      host->Start(registry_.CreateTransport(tm.plugin));
+      transports_.push_back(std::move(host));
+    }
+  }
+}
+
+World::~World() {
+  // Transports first: they may still post events from their threads until Stop joins them.
+  for (auto& t : transports_) t->Stop();
+  transports_.clear();
+  robots_.clear();
+  collision_.reset();
+  scene_.reset();
+  world_.reset();
+}
+
+void World::Build() {
+  const PhysicsModel& ph = model_.physics;
+  world_.reset(dWorldCreate());
+  dWorldID w = world_.get();
+  dWorldSetGravity(w, ph.gravity.x(), ph.gravity.y(), ph.gravity.z());
+  dWorldSetERP(w, ph.erp);
+  dWorldSetCFM(w, ph.cfm);
+  dWorldSetQuickStepNumIterations(w, ph.solver_iterations);
+  dWorldSetContactSurfaceLayer(w, ph.contact_surface_layer);
+  dWorldSetContactMaxCorrectingVel(w, ph.contact_max_correcting_velocity);
+  dWorldSetAutoDisableFlag(w, 0);  // a resting ball must react at once; also keeps runs exact
+
+  scene_ = std::make_unique<SceneGraph>(w);
+  collision_ = std::make_unique<CollisionManager>(*scene_, ParseBroadphase(ph.broadphase),
+                                                  ph.max_contacts);
+  for (const MaterialPair& p : model_.material_pairs) {
+    collision_->materials().SetPair(p.a, p.b, p.surface);
+  }
+
+  NodeImpl& root = scene_->Root();
+  BuildField(*model_.field, static_cast<NodeImpl&>(root.AddChild("field")));
+  ball_ = &BuildBall(*model_.ball, model_.ball_start, static_cast<NodeImpl&>(root.AddChild("ball")));
+  auto& blue = static_cast<NodeImpl&>(root.AddChild("blue"));
+  auto& yellow = static_cast<NodeImpl&>(root.AddChild("yellow"));
+
+  robot_services_holder_ = std::make_unique<RobotServices>();
+  RobotServices& services = *robot_services_holder_;
+  services.ball = ball_;
+  services.ball_radius = model_.ball->radius;
+  services.gravity = ph.gravity;
+  services.sim_time_ns = &sim_time_ns_;
+  for (const RobotPlacement& p : model_.robots) {
+    if (FindRobot(p.id)) {
+      throw std::runtime_error(model_.file + ": robot " + Describe(p.id) + " is placed twice");
+    }
+    NodeImpl& team = p.id.team == Team::kBlue ? blue : yellow;
+    robots_.push_back(std::make_unique<Robot>(p, team, registry_, log_, services));
+  }
+}
+
+void World::Reset() {
+  robots_.clear();
+  collision_.reset();
+  scene_.reset();
+  world_.reset();
+  pending_queries_.clear();
+  clock_.Reset();
+  sim_time_ns_ = 0;
+  ode_random_seed_ = static_cast<unsigned long>(model_.seed);
+  Build();
+  log_.Info("world reset to " + model_.file);
+}
+
+Robot* World::FindRobot(const RobotId& id) const {
+  for (const auto& r : robots_) {
+    if (r->id() == id) return r.get();
+  }
+  return nullptr;
+}
+
+void World::ProcessEvents() { ApplyEvents(false); }
+
+void World::ApplyEvents(bool stepping) {
+  (void)stepping;
+  for (Event& e : events_.Drain()) {
+    std::visit(
+        [this](auto& ev) {
+          using T = std::decay_t<decltype(ev)>;
+          if constexpr (std::is_same_v<T, QueryEvent>) {
+            pending_queries_.push_back(std::move(ev));
+          } else {
+            Apply(ev);
+          }
+        },
+        e);
+  }
+  if (clock_control_.reset_requested) {
+    clock_control_.reset_requested = false;
+    Reset();
+  }
+  for (QueryEvent& q : pending_queries_) {
+    if (q.reply) q.reply(Query(q.target));
+  }
+  pending_queries_.clear();
+}
+
+void World::Apply(const PositionEvent& e) {
+  const bool finite = Finite(e.position) && Finite(e.velocity) && Finite(e.angular_velocity) &&
+                      (!e.yaw || std::isfinite(*e.yaw));
+  if (!finite) {
+    ++event_counters_.rejected;
+    log_.Warning("position event with non-finite values ignored");
+    return;
+  }
+  if (e.target.is_ball) {
+    Pose p = ball_->GetPose();
+    if (e.position) {
+      p.position = *e.position;
+      if (p.position.z() < model_.ball->radius) p.position.z() = model_.ball->radius;
+    }
+    ball_->SetPose(p);
+    Twist t = ball_->GetTwist();
+    if (e.velocity) t.linear = *e.velocity;
+    if (e.angular_velocity) t.angular = *e.angular_velocity;
+    if (e.position && !e.velocity) t = Twist{};  // a placed ball lies still unless told otherwise
+    ball_->SetTwist(t);
+    ++event_counters_.applied;
+    return;
+  }
+  Robot* r = FindRobot(e.target.robot);
+  if (!r) {
+    ++event_counters_.rejected;
+    log_.Warning("position event for unknown robot " + Describe(e.target.robot) + " ignored");
+    return;
+  }
+  if (e.present) r->SetPresent(*e.present);
+  if (e.position || e.yaw) {
+    const Pose p = r->chassis().GetPose();
+    const double x = e.position ? e.position->x() : p.position.x();
+    const double y = e.position ? e.position->y() : p.position.y();
+    r->Teleport(x, y, e.yaw ? *e.yaw : p.Yaw());
+  }
+  if (e.velocity || e.angular_velocity) {
+    const Twist t = r->chassis().GetTwist();
+    r->SetVelocity(e.velocity ? *e.velocity : t.linear,
+                   e.angular_velocity ? *e.angular_velocity : t.angular);
+  } else if (e.position) {
+    r->SetVelocity(Vec3::Zero(), Vec3::Zero());
+  }
+  ++event_counters_.applied;
+}
+
+void World::Apply(const CommandEvent& e) {
+  Robot* r = FindRobot(e.robot);
+  if (!r) {
+    ++event_counters_.rejected;
+    log_.Warning("command for unknown robot " + Describe(e.robot) + " ignored");
+    return;
+  }
+  bool finite = !e.dribbler_speed || std::isfinite(*e.dribbler_speed);
+  if (e.kick) finite = finite && std::isfinite(e.kick->speed) && std::isfinite(e.kick->angle);
+  if (e.move) {
+    std::visit(
+        [&](const auto& m) {
+          using T = std::decay_t<decltype(m)>;
+          if constexpr (std::is_same_v<T, WheelSpeedCommand>) {
+            for (double w : m.wheel_speeds) finite = finite && std::isfinite(w);
+          } else if constexpr (std::is_same_v<T, LocalVelocityCommand>) {
+            finite = finite && std::isfinite(m.forward) && std::isfinite(m.left) &&
+                     std::isfinite(m.angular);
+          } else {
+            finite = finite && std::isfinite(m.x) && std::isfinite(m.y) && std::isfinite(m.angular);
+          }
+        },
+        *e.move);
+  }
+  if (!finite) {
+    ++event_counters_.rejected;
+    log_.Warning("command for robot " + Describe(e.robot) + " with non-finite values ignored");
+    return;
+  }
+  std::string why;
+  if (r->Command(e, why)) {
+    ++event_counters_.applied;
+  } else {
+    ++event_counters_.rejected;
+    log_.Warning("command for robot " + Describe(e.robot) + " partly refused: " + why);
+  }
+}
+
+void World::Apply(const ClockEvent& e) {
+  switch (e.action) {
+    case ClockEvent::Action::kPause: clock_control_.paused = true; break;
+    case ClockEvent::Action::kResume: clock_control_.paused = false; break;
+    case ClockEvent::Action::kStep:
+      clock_control_.paused = true;
+      clock_control_.pending_steps += std::max(0, e.steps);
+      break;
+    case ClockEvent::Action::kSetSpeed:
+      if (!std::isfinite(e.speed_factor) || e.speed_factor < 0) {
+        ++event_counters_.rejected;
+        log_.Warning("speed factor must be finite and >= 0; ignored");
+        return;
+      }
+      clock_control_.speed_factor = e.speed_factor;
+      break;
+    case ClockEvent::Action::kReset: clock_control_.reset_requested = true; break;
+  }
+  ++event_counters_.applied;
+}
+
+ObjectState World::Query(const Target& t) const {
+  ObjectState s;
+  if (t.is_ball) {
+    s.found = true;
+    s.pose = ball_->GetPose();
+    s.twist = ball_->GetTwist();
+    return s;
+  }
+  if (Robot* r = FindRobot(t.robot)) {
+    s.found = true;
+    s.present = r->present();
+    s.pose = r->chassis().GetPose();
+    s.twist = r->chassis().GetTwist();
+  }
+  return s;
+}
+
+void World::Step() {
+  auto t0 = SteadyClock::now();
+  for (auto& t : transports_) t->Guarded("Poll", [](Transport& tr) { tr.Poll(); });
+  timings_.transports_ns += ElapsedNs(t0);
+
+  t0 = SteadyClock::now();
+  ApplyEvents(true);
+  timings_.events_ns += ElapsedNs(t0);
+
+  const StepInfo info{clock_.steps(), clock_.step_seconds(), clock_.time_ns()};
+  t0 = SteadyClock::now();
+  for (auto& r : robots_) r->PreStep(info);
+  timings_.plugins_ns += ElapsedNs(t0);
+
+  t0 = SteadyClock::now();
+  collision_->Collide();
+  timings_.collision_ns += ElapsedNs(t0);
+
+  t0 = SteadyClock::now();
+  // ODE's QuickStep draws from one process-wide generator; each world keeps its own sequence.
+  dRandSetSeed(ode_random_seed_);
+  dWorldQuickStep(world_.get(), clock_.step_seconds());
+  ode_random_seed_ = dRandGetSeed();
+  collision_->ClearContacts();
+  timings_.physics_ns += ElapsedNs(t0);
+  clock_.Advance();
+  sim_time_ns_ = clock_.time_ns();
+
+  const StepInfo after{info.step, info.dt, clock_.time_ns()};
+  t0 = SteadyClock::now();
+  for (auto& r : robots_) r->PostStep(after);
+  timings_.plugins_ns += ElapsedNs(t0);
+
+  t0 = SteadyClock::now();
+  if (!transports_.empty()) {
+    const WorldSnapshot snapshot = Snapshot();
+    for (auto& t : transports_) {
+      t->Guarded("Publish", [&](Transport& tr) { tr.Publish(snapshot); });
+    }
+  }
+  timings_.transports_ns += ElapsedNs(t0);
+}
+
+WorldSnapshot World::Snapshot() const {
+  WorldSnapshot s;
+  s.step = clock_.steps();
+  s.sim_time_ns = clock_.time_ns();
+  s.ball.pose = ball_->GetPose();
+  s.ball.twist = ball_->GetTwist();
+  s.ball.radius = model_.ball->radius;
+  s.robots.reserve(robots_.size());
+  for (Team team : {Team::kBlue, Team::kYellow}) {
+    for (const auto& r : robots_) {
+      if (r->id().team == team) s.robots.push_back(r->State());
+    }
+  }
+  s.field = &field_geometry_;
+  return s;
+}
+
+std::uint64_t World::StateHash() const {
+  std::uint64_t h = 1469598103934665603ULL;
+  const std::int64_t steps = clock_.steps();
+  HashBytes(h, &steps, sizeof steps);
+  scene_->Root().ForEachBody([&](BodyImpl& b) {
+    const dBodyID id = b.id();
+    HashBytes(h, dBodyGetPosition(id), 3 * sizeof(dReal));
+    HashBytes(h, dBodyGetQuaternion(id), 4 * sizeof(dReal));
+    HashBytes(h, dBodyGetLinearVel(id), 3 * sizeof(dReal));
+    HashBytes(h, dBodyGetAngularVel(id), 3 * sizeof(dReal));
+  });
+  return h;
+}
+
+std::vector<std::string> World::TransportEndpoints() const {
+  std::vector<std::string> out;
+  for (const auto& t : transports_) out.push_back(t->Endpoint());
+  return out;
+}
+
+}  // namespace ubersim::kernel
