@@ -127,7 +127,7 @@ void CollisionManager::SetBroadphase(Broadphase broadphase) {
   if (broadphase == Broadphase::kHash) {
     space_.reset(dHashSpaceCreate(nullptr));
     // Cells from 2^-6 m (about a ball) to 2^4 m (a wall).
-    dHashSpaceSetLevels(space_.get(), -6, 4);
+    dHashSpaceSetLevels(space_.get(), -3, 4);
   } else if (broadphase == Broadphase::kSweepAndPrune) {
     space_.reset(dSweepAndPruneSpaceCreate(nullptr, dSAP_AXES_XYZ));
   }
