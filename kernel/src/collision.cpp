@@ -32,6 +32,14 @@ double CombineOptional(double a, double b, Pick pick) {
   return pick(a, b);
 }
 
+bool AabbsOverlap(dGeomID a, dGeomID b) {
+  dReal x[6], y[6];
+  dGeomGetAABB(a, x);
+  dGeomGetAABB(b, y);
+  return x[0] <= y[1] && y[0] <= x[1] && x[2] <= y[3] && y[2] <= x[3] && x[4] <= y[5] &&
+         y[4] <= x[5];
+}
+
 struct SpaceCallbackData {
   const std::function<void(GeomImpl&, GeomImpl&)>* f;
 };
@@ -146,51 +154,76 @@ bool CollisionManager::MayCollide(const GeomImpl& a, const GeomImpl& b) {
   return !IsAncestorOrSelf(na, nb) && !IsAncestorOrSelf(nb, na);
 }
 
-void CollisionManager::ForEachCandidatePair(const std::function<void(GeomImpl&, GeomImpl&)>& f) {
+namespace {
+
+// The hierarchical bounding-sphere traversal, as a template so the per-pair call inlines.
+template <typename F>
+struct SphereTree {
+  F& f;
+  std::size_t& tests;
+
+  // All pairs inside one subtree: within each child, and between every two children. A node's
+  // own geometries are never paired with its descendants (ancestor rule) nor with each other.
+  void WithinSubtree(const NodeImpl& node) {
+    const auto& children = node.children();
+    for (const auto& c : children) WithinSubtree(*c);
+    for (std::size_t i = 0; i < children.size(); ++i) {
+      for (std::size_t j = i + 1; j < children.size(); ++j) NodeVsNode(*children[i], *children[j]);
+    }
+  }
+
+  // Two disjoint subtrees: prune when their spheres miss, else open the larger one (so a robot
+  // is tested against each opposing robot before any of its wheels is).
+  void NodeVsNode(const NodeImpl& a, const NodeImpl& b) {
+    ++tests;
+    if (!a.Bounds().Overlaps(b.Bounds())) return;
+    if (b.Bounds().radius > a.Bounds().radius) {
+      Open(b, a);
+    } else {
+      Open(a, b);
+    }
+  }
+
+  void Open(const NodeImpl& opened, const NodeImpl& other) {
+    for (const auto& g : opened.geoms()) {
+      if (g->collides()) GeomVsNode(*g, other);
+    }
+    for (const auto& c : opened.children()) NodeVsNode(*c, other);
+  }
+
+  void GeomVsNode(GeomImpl& g, const NodeImpl& node) {
+    const BoundingSphere& gb = g.cached_bounds();
+    ++tests;
+    if (!gb.Overlaps(node.Bounds())) return;
+    for (const auto& h : node.geoms()) {
+      if (!h->collides()) continue;
+      if (!g.body() && !h->body()) continue;
+      if (g.body() == h->body()) continue;
+      ++tests;
+      // Spheres prune the tree; a final box test drops long walls' many false positives.
+      if (gb.Overlaps(h->cached_bounds()) && AabbsOverlap(g.id(), h->id())) f(g, *h);
+    }
+    for (const auto& c : node.children()) GeomVsNode(g, *c);
+  }
+};
+
+}  // namespace
+
+template <typename F>
+void CollisionManager::ForEachPair(F& f) {
   if (broadphase_ == Broadphase::kSceneGraph) {
     graph_.UpdateBounds();
-    WithinSubtree(graph_.Root(), f);
+    SphereTree<F>{f, stats_.sphere_tests}.WithinSubtree(graph_.Root());
     return;
   }
-  SpaceCallbackData data{&f};
+  std::function<void(GeomImpl&, GeomImpl&)> call = [&f](GeomImpl& a, GeomImpl& b) { f(a, b); };
+  SpaceCallbackData data{&call};
   dSpaceCollide(space_.get(), &data, &SpaceNearCallback);
 }
 
-// All pairs inside one subtree: within each child, and between every two children. A node's own
-// geometries are never paired with its descendants (ancestor rule) nor with each other.
-void CollisionManager::WithinSubtree(const NodeImpl& node,
-                                     const std::function<void(GeomImpl&, GeomImpl&)>& f) {
-  const auto& children = node.children();
-  for (const auto& c : children) WithinSubtree(*c, f);
-  for (std::size_t i = 0; i < children.size(); ++i) {
-    for (std::size_t j = i + 1; j < children.size(); ++j) NodeVsNode(*children[i], *children[j], f);
-  }
-}
-
-// Two disjoint subtrees: prune when their spheres miss, else descend into both.
-void CollisionManager::NodeVsNode(const NodeImpl& a, const NodeImpl& b,
-                                  const std::function<void(GeomImpl&, GeomImpl&)>& f) {
-  ++stats_.sphere_tests;
-  if (!a.Bounds().Overlaps(b.Bounds())) return;
-  for (const auto& g : a.geoms()) {
-    if (!g->collides()) continue;
-    GeomVsNode(*g, g->WorldBounds(), b, f);
-  }
-  for (const auto& c : a.children()) NodeVsNode(*c, b, f);
-}
-
-void CollisionManager::GeomVsNode(GeomImpl& g, const BoundingSphere& gb, const NodeImpl& node,
-                                  const std::function<void(GeomImpl&, GeomImpl&)>& f) {
-  ++stats_.sphere_tests;
-  if (!gb.Overlaps(node.Bounds())) return;
-  for (const auto& h : node.geoms()) {
-    if (!h->collides()) continue;
-    if (!g.body() && !h->body()) continue;
-    if (g.body() == h->body()) continue;
-    ++stats_.sphere_tests;
-    if (gb.Overlaps(h->WorldBounds())) f(g, *h);
-  }
-  for (const auto& c : node.children()) GeomVsNode(g, gb, *c, f);
+void CollisionManager::ForEachCandidatePair(const std::function<void(GeomImpl&, GeomImpl&)>& f) {
+  auto call = [&f](GeomImpl& a, GeomImpl& b) { f(a, b); };
+  ForEachPair(call);
 }
 
 std::vector<std::pair<GeomImpl*, GeomImpl*>> CollisionManager::TouchingPairs() {
@@ -205,7 +238,8 @@ std::vector<std::pair<GeomImpl*, GeomImpl*>> CollisionManager::TouchingPairs() {
 
 void CollisionManager::Collide() {
   stats_ = CollisionStats{};
-  ForEachCandidatePair([this](GeomImpl& a, GeomImpl& b) { Narrow(a, b); });
+  auto narrow = [this](GeomImpl& a, GeomImpl& b) { Narrow(a, b); };
+  ForEachPair(narrow);
 }
 
 void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }

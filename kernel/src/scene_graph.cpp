@@ -413,7 +413,8 @@ Joint* NodeImpl::FindJoint(std::string_view name) const {
 const BoundingSphere& NodeImpl::UpdateBounds() {
   BoundingSphere b;
   for (const auto& g : geoms_) {
-    if (g->collides()) b.Merge(g->WorldBounds());
+    g->RefreshBounds();
+    if (g->collides()) b.Merge(g->cached_bounds());
   }
   for (const auto& c : children_) b.Merge(c->UpdateBounds());
   bounds_ = b;

@@ -86,11 +86,8 @@ class CollisionManager {
 
  private:
   void Narrow(GeomImpl& a, GeomImpl& b);
-  void WithinSubtree(const NodeImpl& node, const std::function<void(GeomImpl&, GeomImpl&)>& f);
-  void NodeVsNode(const NodeImpl& a, const NodeImpl& b,
-                  const std::function<void(GeomImpl&, GeomImpl&)>& f);
-  void GeomVsNode(GeomImpl& g, const BoundingSphere& gb, const NodeImpl& node,
-                  const std::function<void(GeomImpl&, GeomImpl&)>& f);
+  template <typename F>
+  void ForEachPair(F& f);
 
   SceneGraph& graph_;
   Broadphase broadphase_;

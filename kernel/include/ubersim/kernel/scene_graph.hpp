@@ -66,6 +66,10 @@ class GeomImpl final : public Geom {
   const std::optional<Vec3>& friction_axis() const { return friction_axis_; }
   /// World bounding sphere now (infinite for planes).
   BoundingSphere WorldBounds() const;
+  /// The bounding sphere as of the last SceneGraph::UpdateBounds().
+  const BoundingSphere& cached_bounds() const { return cached_bounds_; }
+  /// Refreshes cached_bounds() (called by NodeImpl::UpdateBounds).
+  void RefreshBounds() { cached_bounds_ = WorldBounds(); }
   /// Adds a contact observer.
   void AddObserver(ContactHandler handler) { observers_.push_back(std::move(handler)); }
   /// Removes every contact observer.
@@ -86,6 +90,7 @@ class GeomImpl final : public Geom {
   bool collides_;
   bool is_ball_ = false;
   double bounding_radius_;
+  BoundingSphere cached_bounds_;
   std::vector<ContactHandler> observers_;
   std::vector<dReal> mesh_vertices_;
   std::vector<dTriIndex> mesh_indices_;

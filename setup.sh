@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Installs what is missing (Debian packages, apt-get), builds ÜberSim, and runs the default world.
+#   ./setup.sh                 install + build + run models/worlds/div-b.yaml in real time (Ctrl-C stops)
+#   ./setup.sh --no-run        install + build only
+#   ./setup.sh --install-only  install only
+# Environment: BUILD_DIR (default build), BUILD_TYPE (default RelWithDebInfo), JOBS (default nproc).
+set -euo pipefail
+cd "$(dirname "$0")"
+
+# Everything the build, the tests and the tools need, from Debian only.
+PACKAGES=(
+  g++ cmake ninja-build pkg-config git
+  libode-dev libeigen3-dev liburdfdom-dev libassimp-dev
+  libboost-dev libboost-program-options-dev
+  libyaml-cpp-dev rapidjson-dev
+  libprotobuf-dev protobuf-compiler
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+install_missing() {
+  local missing=()
+  for p in "${PACKAGES[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+      missing+=("$p")
+    fi
+  done
+  if [ ${#missing[@]} -eq 0 ]; then
+    return 0
+  fi
+  echo "setup: installing ${missing[*]}"
+  local sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "setup: need root (or sudo) to apt-get install ${missing[*]}" >&2; exit 1; }
+    sudo="sudo"
+  fi
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+build() {
+  local dir="${BUILD_DIR:-build}"
+  local jobs="${JOBS:-$(nproc)}"
+  if [ ! -f "$dir/build.ninja" ]; then
+    cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}" >/dev/null
+  fi
+  cmake --build "$dir" -j "$jobs"
+}
+
+mode="${1:-run}"
+install_missing
+[ "$mode" = "--install-only" ] && exit 0
+build
+[ "$mode" = "--no-run" ] && exit 0
+exec "${BUILD_DIR:-build}/bin/ubersim" run
