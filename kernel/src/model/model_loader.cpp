@@ -1,0 +1,487 @@
+// SPDX-License-Identifier: Apache-2.0
+// ModelLoader: model files (world, field, ball, robot) -> validated, typed models.
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <system_error>
+#include <utility>
+
+#include "model_internal.hpp"
+#include "ubersim/kernel/model.hpp"
+
+namespace ubersim::kernel {
+namespace {
+
+namespace fs = std::filesystem;
+using detail::ParamNode;
+using model_detail::Describe;
+using model_detail::ErrorAt;
+using model_detail::FormatNumber;
+
+constexpr const char* kKinds[] = {"world", "field", "ball", "robot"};
+
+std::string Metres(double v) { return FormatNumber(v) + " m"; }
+
+/// The `kind:` of a model file's root; throws ModelError when it is missing or unknown.
+std::string KindOf(const ParamView& root) {
+  if (root.IsNull()) {
+    throw ErrorAt(root, "", "the file is empty (a model file starts with 'kind: world|field|ball|robot')");
+  }
+  if (!root.IsObject()) {
+    throw ErrorAt(root, "", "expected a mapping of keys at the top level (a model file starts with "
+                            "'kind: world|field|ball|robot'), got " + Describe(root.Node()));
+  }
+  if (!root.Has("kind")) {
+    throw ErrorAt(root, "kind", "missing required key 'kind' (one of: world, field, ball, robot)");
+  }
+  const ParamView k = root["kind"];
+  if (!k.IsString()) throw ErrorAt(k, "expected a string, got " + Describe(k.Node()));
+  const std::string kind = k.AsString();
+  for (const char* known : kKinds) {
+    if (kind == known) return kind;
+  }
+  throw ErrorAt(k, "unknown kind '" + kind + "' (allowed: world, field, ball, robot)");
+}
+
+std::string ErrnoText(int err) { return std::strerror(err ? err : ENOENT); }
+
+/// Why `file` cannot be read, or "" when it can.
+std::string Unreadable(const fs::path& file) {
+  std::error_code ec;
+  if (fs::is_directory(file, ec)) return std::strerror(EISDIR);
+  errno = 0;
+  std::ifstream probe(file, std::ios::binary);
+  if (!probe) return ErrnoText(errno);
+  return "";
+}
+
+SurfaceMaterial ReadSurface(const ParamView& parent, const char* key, const std::string& default_name) {
+  SurfaceMaterial s;
+  s.name = default_name;
+  if (!parent.Has(key)) return s;
+  const ParamView v = parent[key];
+  s.name = v.GetString("name", default_name);
+  s.mu = v.GetDouble("mu", s.mu);
+  s.mu2 = v.GetDouble("mu2", s.mu2);
+  s.bounce = v.GetDouble("bounce", s.bounce);
+  s.bounce_velocity = v.GetDouble("bounce_velocity", s.bounce_velocity);
+  s.soft_erp = v.GetDouble("soft_erp", s.soft_erp);
+  s.soft_cfm = v.GetDouble("soft_cfm", s.soft_cfm);
+  s.rolling_friction = v.GetDouble("rolling_friction", s.rolling_friction);
+  s.slip = v.GetDouble("slip", s.slip);
+  return s;
+}
+
+/// A copy of the object `block` without its `plugin` member: the plugin's own parameters.
+std::shared_ptr<const ParamNode> WithoutPlugin(const ParamView& block) {
+  auto copy = std::make_shared<ParamNode>(block.Node());
+  auto& m = copy->members;
+  for (auto it = m.begin(); it != m.end(); ++it) {
+    if (it->first == "plugin") {
+      m.erase(it);
+      break;
+    }
+  }
+  return copy;
+}
+
+}  // namespace
+
+struct ModelLoader::Impl {
+  fs::path schema_dir;
+  PluginSchemaLookup lookup;
+  mutable std::mutex mutex;
+  mutable std::map<std::string, std::string> schemas;
+
+  const std::string& Schema(const std::string& kind) const {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = schemas.find(kind);
+    if (it != schemas.end()) return it->second;
+    const fs::path p = schema_dir / (kind + ".schema.json");
+    errno = 0;
+    std::ifstream in(p, std::ios::binary);
+    if (!in) {
+      throw ModelError(p.string(), 0, 0, "",
+                       "cannot open file: " + ErrnoText(errno) +
+                           " (the schemas folder; set UBERSIM_SCHEMA_DIR to override)");
+    }
+    std::ostringstream text;
+    text << in.rdbuf();
+    return schemas.emplace(kind, text.str()).first->second;
+  }
+
+  /// Reads `file`, checks it is a `kind` model and validates it against the kind's schema.
+  /// `naming` is the key of another file that names this one (errors about opening the file or
+  /// its kind are reported there), or nullptr.
+  ParamView Read(const fs::path& file, const std::string& kind, const ParamView* naming) const {
+    if (naming) {
+      if (const std::string why = Unreadable(file); !why.empty()) {
+        throw ErrorAt(*naming, "cannot open " + kind + " file '" + file.string() + "': " + why);
+      }
+    }
+    const ParamView root(ParseYamlFile(file));
+    const std::string actual = KindOf(root);
+    if (actual != kind) {
+      if (naming) {
+        throw ErrorAt(*naming, "'" + file.string() + "' is a " + actual + " model (kind: " + actual +
+                                   "), expected a " + kind + " model");
+      }
+      throw ErrorAt(root["kind"], "expected kind '" + kind + "', got '" + actual + "'");
+    }
+    ValidateAgainstSchema(root, Schema(kind), kind + ".schema.json");
+    return root;
+  }
+
+  /// Checks a plugin's parameter block against the schema the plugin ships.
+  void CheckPlugin(PluginKind kind, const std::string& id, const ParamView& plugin_key,
+                   const ParamView& params) const {
+    if (!lookup) return;
+    std::string schema;
+    try {
+      schema = lookup(kind, id);
+    } catch (const std::exception& e) {
+      throw ErrorAt(plugin_key, "unknown plugin '" + id + "': " + e.what());
+    }
+    if (schema.empty()) return;  // the plugin declares no schema: nothing to check
+    ValidateAgainstSchema(params, schema,
+                          "the schema of " + std::string(ToString(kind)) + " plugin '" + id + "'");
+  }
+
+  /// The component block `key` of a robot (drive, dribbler, kicker), if present.
+  std::optional<ComponentModel> Component(const ParamView& root, const char* key,
+                                          PluginKind kind) const {
+    if (!root.Has(key)) return std::nullopt;
+    const ParamView block = root[key];
+    const ParamView plugin_key = block["plugin"];
+    ComponentModel c;
+    c.plugin = plugin_key.AsString();
+    c.params = ParamView(WithoutPlugin(block), block.Path());
+    CheckPlugin(kind, c.plugin, plugin_key, c.params);
+    return c;
+  }
+
+  std::shared_ptr<const FieldModel> Field(const fs::path& file, const ParamView* naming) const {
+    const ParamView v = Read(file, "field", naming);
+    auto f = std::make_shared<FieldModel>();
+    f->file = file.string();
+    FieldGeometry& g = f->geometry;
+    g.name = v["name"].AsString();
+    g.field_length = v["field_length"].AsDouble();
+    g.field_width = v["field_width"].AsDouble();
+    g.boundary_width = v["boundary_width"].AsDouble();
+    const double goal_line_boundary = v.GetDouble("goal_line_boundary_width", g.boundary_width);
+    g.line_thickness = v.GetDouble("line_thickness", 0.01);
+    g.center_circle_radius = v.GetDouble("center_circle_radius", 0.0);
+    if (v.Has("penalty_area")) {
+      g.penalty_area_depth = v["penalty_area"]["depth"].AsDouble();
+      g.penalty_area_width = v["penalty_area"]["width"].AsDouble();
+    }
+    g.goal_center_to_penalty_mark = v.GetDouble("penalty_mark_distance", 0.0);
+    const ParamView goal = v["goal"];
+    g.goal_width = goal["width"].AsDouble();
+    g.goal_depth = goal["depth"].AsDouble();
+    g.goal_height = goal["height"].AsDouble();
+    f->goal_wall_thickness = goal.GetDouble("wall_thickness", f->goal_wall_thickness);
+    if (v.Has("wall")) {
+      const ParamView wall = v["wall"];
+      f->wall.height = wall.GetDouble("height", f->wall.height);
+      f->wall.thickness = wall.GetDouble("thickness", f->wall.thickness);
+      f->wall.corner_cut = wall.GetDouble("corner_cut", f->wall.corner_cut);
+    }
+    g.carpet_length = g.field_length + 2.0 * goal_line_boundary;
+    g.carpet_width = g.field_width + 2.0 * g.boundary_width;
+    const ParamView surfaces = v.Has("surfaces") ? v["surfaces"] : ParamView();
+    f->carpet = ReadSurface(surfaces, "carpet", "carpet");
+    f->wall_surface = ReadSurface(surfaces, "wall", "wall");
+    f->goal_surface = ReadSurface(surfaces, "goal", "goal");
+
+    // Sizes that each pass the schema but do not fit together.
+    if (g.goal_width >= g.field_width) {
+      throw ErrorAt(goal["width"], "the goal (" + Metres(g.goal_width) +
+                                       ") must be narrower than the field (" + Metres(g.field_width) + ")");
+    }
+    if (v.Has("penalty_area")) {
+      const ParamView pa = v["penalty_area"];
+      if (g.penalty_area_width >= g.field_width) {
+        throw ErrorAt(pa["width"], "the defense area (" + Metres(g.penalty_area_width) +
+                                       ") must be narrower than the field (" + Metres(g.field_width) + ")");
+      }
+      if (g.penalty_area_depth >= 0.5 * g.field_length) {
+        throw ErrorAt(pa["depth"], "the defense area depth (" + Metres(g.penalty_area_depth) +
+                                       ") must be less than half the field length (" +
+                                       Metres(0.5 * g.field_length) + ")");
+      }
+    }
+    if (g.center_circle_radius >= 0.5 * std::min(g.field_length, g.field_width)) {
+      throw ErrorAt(v["center_circle_radius"], "the centre circle (radius " +
+                                                   Metres(g.center_circle_radius) +
+                                                   ") does not fit on the field");
+    }
+    if (g.goal_center_to_penalty_mark >= g.field_length) {
+      throw ErrorAt(v["penalty_mark_distance"], "the penalty mark (" +
+                                                    Metres(g.goal_center_to_penalty_mark) +
+                                                    " from the goal) lies beyond the field length (" +
+                                                    Metres(g.field_length) + ")");
+    }
+    if (f->wall.corner_cut >= 0.5 * std::min(g.carpet_length, g.carpet_width)) {
+      throw ErrorAt(v["wall"]["corner_cut"], "the corner cut (" + Metres(f->wall.corner_cut) +
+                                                 ") must be less than half the walled width (" +
+                                                 Metres(0.5 * std::min(g.carpet_length, g.carpet_width)) + ")");
+    }
+    BuildFieldMarkings(g);
+    return f;
+  }
+
+  std::shared_ptr<const BallModel> Ball(const fs::path& file, const ParamView* naming) const {
+    const ParamView v = Read(file, "ball", naming);
+    auto b = std::make_shared<BallModel>();
+    b->file = file.string();
+    b->name = v["name"].AsString();
+    b->radius = v["radius"].AsDouble();
+    b->mass = v["mass"].AsDouble();
+    b->inertia_factor = v.GetDouble("inertia_factor", b->inertia_factor);
+    if (v.Has("damping")) {
+      b->linear_damping = v["damping"].GetDouble("linear", b->linear_damping);
+      b->angular_damping = v["damping"].GetDouble("angular", b->angular_damping);
+    }
+    b->surface = ReadSurface(v, "surface", "ball");
+    return b;
+  }
+
+  std::shared_ptr<const RobotModel> Robot(const fs::path& file, const ParamView* naming) const {
+    const ParamView v = Read(file, "robot", naming);
+    auto r = std::make_shared<RobotModel>();
+    r->file = file.string();
+    r->name = v["name"].AsString();
+    const ParamView body = v["body"];
+    r->body.mass = body["mass"].AsDouble();
+    r->body.radius = body["radius"].AsDouble();
+    r->body.height = body["height"].AsDouble();
+    r->body.front_distance = body.GetDouble("front_distance", r->body.radius);
+    r->body.ground_clearance = body.GetDouble("ground_clearance", r->body.ground_clearance);
+    if (r->body.front_distance > r->body.radius) {
+      throw ErrorAt(body["front_distance"], "the flat front (" + Metres(r->body.front_distance) +
+                                                " from the centre) lies outside the radius (" +
+                                                Metres(r->body.radius) + ")");
+    }
+    if (r->body.ground_clearance >= r->body.height) {
+      throw ErrorAt(body["ground_clearance"], "the ground clearance (" +
+                                                  Metres(r->body.ground_clearance) +
+                                                  ") must be less than the height (" +
+                                                  Metres(r->body.height) + ")");
+    }
+    r->surface = ReadSurface(v, "surface", "robot");
+    r->drive = Component(v, "drive", PluginKind::kDrive);
+    r->dribbler = Component(v, "dribbler", PluginKind::kDribbler);
+    r->kicker = Component(v, "kicker", PluginKind::kKicker);
+    return r;
+  }
+
+  WorldModel World(const fs::path& file) const {
+    const ParamView v = Read(file, "world", nullptr);
+    WorldModel w;
+    w.file = file.string();
+    w.name = v["name"].AsString();
+    const fs::path base = file.parent_path();
+    const auto resolve = [&](const ParamView& key) {
+      fs::path p = key.AsString();
+      if (p.is_relative()) p = base / p;
+      return p.lexically_normal();
+    };
+
+    const ParamView field_key = v["field"];
+    w.field = Field(resolve(field_key), &field_key);
+    const ParamView ball_key = v["ball"];
+    w.ball = Ball(resolve(ball_key), &ball_key);
+    const FieldGeometry& g = w.field->geometry;
+    const double half_x = 0.5 * g.carpet_length, half_y = 0.5 * g.carpet_width;
+
+    if (v.Has("ball_start")) {
+      const ParamView bs = v["ball_start"];
+      w.ball_start = bs.AsVec3();
+      const double reach_x = std::max(half_x, 0.5 * g.field_length + g.goal_depth);
+      if (std::abs(w.ball_start.x()) > reach_x || std::abs(w.ball_start.y()) > half_y) {
+        throw ErrorAt(bs, "the ball start (" + FormatNumber(w.ball_start.x()) + ", " +
+                              FormatNumber(w.ball_start.y()) + ") lies outside the walls of field '" +
+                              g.name + "' (|x| ≤ " + Metres(reach_x) + ", |y| ≤ " + Metres(half_y) + ")");
+      }
+    }
+
+    if (v.Has("robots")) {
+      const ParamView robots = v["robots"];
+      std::map<std::string, std::shared_ptr<const RobotModel>> models;
+      std::map<std::pair<int, int>, int> placed;  // (team, id) -> line
+      for (std::size_t i = 0; i < robots.Size(); ++i) {
+        const ParamView e = robots.At(i);
+        RobotPlacement p;
+        p.id.team = e["team"].AsString() == "yellow" ? Team::kYellow : Team::kBlue;
+        p.id.id = static_cast<int>(e["id"].AsInt());
+        const ParamView model_key = e["model"];
+        const fs::path model_file = resolve(model_key);
+        auto& model = models[model_file.string()];
+        if (!model) model = Robot(model_file, &model_key);
+        p.model = model;
+        p.x = e.GetDouble("x", 0.0);
+        p.y = e.GetDouble("y", 0.0);
+        p.yaw = e.GetDouble("yaw", 0.0);
+        p.present = e.GetBool("present", true);
+        const auto key = std::make_pair(static_cast<int>(p.id.team), p.id.id);
+        if (const auto it = placed.find(key); it != placed.end()) {
+          throw ErrorAt(e["id"], std::string("robot ") + ToString(p.id.team) + " " +
+                                     std::to_string(p.id.id) + " is already placed at line " +
+                                     std::to_string(it->second));
+        }
+        placed[key] = e.Node().line;
+        if (std::abs(p.x) > half_x) {
+          throw ErrorAt(e["x"], "x " + Metres(p.x) + " lies outside the walls (|x| ≤ " + Metres(half_x) + ")");
+        }
+        if (std::abs(p.y) > half_y) {
+          throw ErrorAt(e["y"], "y " + Metres(p.y) + " lies outside the walls (|y| ≤ " + Metres(half_y) + ")");
+        }
+        w.robots.push_back(std::move(p));
+      }
+    }
+
+    if (v.Has("physics")) {
+      const ParamView p = v["physics"];
+      PhysicsModel& m = w.physics;
+      m.step = p.GetDouble("step", m.step);
+      m.solver_iterations = static_cast<int>(p.GetInt("solver_iterations", m.solver_iterations));
+      m.erp = p.GetDouble("erp", m.erp);
+      m.cfm = p.GetDouble("cfm", m.cfm);
+      if (p.Has("gravity")) m.gravity = p["gravity"].AsVec3();
+      m.broadphase = p.GetString("broadphase", m.broadphase);
+      m.max_contacts = static_cast<int>(p.GetInt("max_contacts", m.max_contacts));
+      m.contact_surface_layer = p.GetDouble("contact_surface_layer", m.contact_surface_layer);
+      m.contact_max_correcting_velocity =
+          p.GetDouble("contact_max_correcting_velocity", m.contact_max_correcting_velocity);
+    }
+    w.seed = static_cast<std::uint64_t>(v.GetInt("seed", static_cast<std::int64_t>(w.seed)));
+
+    if (v.Has("plugin_paths")) {
+      const ParamView paths = v["plugin_paths"];
+      for (std::size_t i = 0; i < paths.Size(); ++i) w.plugin_paths.push_back(resolve(paths.At(i)));
+    }
+
+    if (v.Has("transports")) {
+      const ParamView transports = v["transports"];
+      for (std::size_t i = 0; i < transports.Size(); ++i) {
+        const ParamView block = transports.At(i);
+        const ParamView plugin_key = block["plugin"];
+        TransportModel t;
+        t.plugin = plugin_key.AsString();
+        t.params = ParamView(WithoutPlugin(block), block.Path());
+        CheckPlugin(PluginKind::kTransport, t.plugin, plugin_key, t.params);
+        w.transports.push_back(std::move(t));
+      }
+    }
+
+    if (v.Has("materials")) {
+      const ParamView materials = v["materials"];
+      std::map<std::pair<std::string, std::string>, int> seen;  // sorted pair -> line
+      for (std::size_t i = 0; i < materials.Size(); ++i) {
+        const ParamView e = materials.At(i);
+        const ParamView between = e["between"];
+        MaterialPair m;
+        m.a = between.At(0).AsString();
+        m.b = between.At(1).AsString();
+        SurfaceMaterial s;
+        s.name = m.a + "|" + m.b;
+        s.mu = e.GetDouble("mu", s.mu);
+        s.mu2 = e.GetDouble("mu2", s.mu2);
+        s.bounce = e.GetDouble("bounce", s.bounce);
+        s.bounce_velocity = e.GetDouble("bounce_velocity", s.bounce_velocity);
+        s.soft_erp = e.GetDouble("soft_erp", s.soft_erp);
+        s.soft_cfm = e.GetDouble("soft_cfm", s.soft_cfm);
+        s.rolling_friction = e.GetDouble("rolling_friction", s.rolling_friction);
+        s.slip = e.GetDouble("slip", s.slip);
+        m.surface = s;
+        const auto key = m.a < m.b ? std::make_pair(m.a, m.b) : std::make_pair(m.b, m.a);
+        if (const auto it = seen.find(key); it != seen.end()) {
+          throw ErrorAt(between, "the pair " + m.a + "|" + m.b + " is already given at line " +
+                                     std::to_string(it->second));
+        }
+        seen[key] = between.Node().line;
+        w.material_pairs.push_back(std::move(m));
+      }
+    }
+
+    if (v.Has("perception")) w.perception = v["perception"];
+    if (v.Has("radio")) w.radio = v["radio"];
+    return w;
+  }
+};
+
+namespace {
+
+/// Runs `f`; a ParamError (a getter on a value the schema let through in an unexpected shape,
+/// e.g. with an edited schema) becomes a ModelError of `file`.
+template <typename F>
+auto Guard(const fs::path& file, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const ParamError& e) {
+    throw ModelError(file.string(), 0, 0, "", e.what());
+  }
+}
+
+}  // namespace
+
+ModelLoader::ModelLoader(std::filesystem::path schema_dir, PluginSchemaLookup plugin_schema) {
+  auto impl = std::make_shared<Impl>();
+  impl->schema_dir = std::move(schema_dir);
+  impl->lookup = std::move(plugin_schema);
+  impl_ = std::move(impl);
+}
+
+WorldModel ModelLoader::LoadWorld(const std::filesystem::path& file) const {
+  return Guard(file, [&] { return impl_->World(file); });
+}
+
+std::shared_ptr<const FieldModel> ModelLoader::LoadField(const std::filesystem::path& file) const {
+  return Guard(file, [&] { return impl_->Field(file, nullptr); });
+}
+
+std::shared_ptr<const BallModel> ModelLoader::LoadBall(const std::filesystem::path& file) const {
+  return Guard(file, [&] { return impl_->Ball(file, nullptr); });
+}
+
+std::shared_ptr<const RobotModel> ModelLoader::LoadRobot(const std::filesystem::path& file) const {
+  return Guard(file, [&] { return impl_->Robot(file, nullptr); });
+}
+
+std::string ModelLoader::Validate(const std::filesystem::path& file) const {
+  const std::string kind = KindOf(ParamView(ParseYamlFile(file)));
+  if (kind == "world") LoadWorld(file);
+  else if (kind == "field") LoadField(file);
+  else if (kind == "ball") LoadBall(file);
+  else LoadRobot(file);
+  return kind;
+}
+
+std::filesystem::path ModelLoader::DefaultSchemaDir() {
+  if (const char* env = std::getenv("UBERSIM_SCHEMA_DIR"); env && *env) return fs::path(env);
+  std::vector<fs::path> candidates;
+  if (const char* data = std::getenv("UBERSIM_DATA_DIR"); data && *data) {
+    candidates.push_back(fs::path(data) / "schemas");
+  }
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) candidates.push_back(exe.parent_path() / ".." / UBERSIM_DATA_INSTALL_DIR / "schemas");
+  candidates.push_back(fs::path(UBERSIM_SOURCE_DIR) / "schemas");
+  for (const fs::path& c : candidates) {
+    if (fs::is_directory(c, ec)) {
+      const fs::path canonical = fs::weakly_canonical(c, ec);
+      return ec ? c : canonical;
+    }
+  }
+  return candidates.back();
+}
+
+}  // namespace ubersim::kernel
