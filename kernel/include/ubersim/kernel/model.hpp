@@ -89,7 +89,7 @@ struct PhysicsModel {
   double erp = 0.2;                ///< global ERP
   double cfm = 1e-7;               ///< global CFM
   Vec3 gravity = Vec3(0, 0, -9.81);  ///< m/s²
-  std::string broadphase = "scene_graph";  ///< "scene_graph", "hash" or "sap"
+  std::string broadphase = "sap";  ///< "sap" (measured fastest), "scene_graph" or "hash"
   int max_contacts = 4;            ///< contacts per geometry pair
   double contact_surface_layer = 0.0005;  ///< m
   double contact_max_correcting_velocity = 10.0;  ///< m/s
