@@ -1,0 +1,119 @@
+// SPDX-License-Identifier: Apache-2.0
+// The `ubersim` command as a user runs it: a separate process, its output and exit code.
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+Result RunUbersim(const std::string& args, const std::string& env = "") {
+  const std::string cmd = env + " " UBERSIM_BINARY_DIR "/bin/ubersim " + args + " 2>&1";
+  Result r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+fs::path TempDir() {
+  const fs::path dir = fs::temp_directory_path() /
+                       ("ubersim_cli_test_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+const std::string kModels = UBERSIM_SOURCE_DIR "/models";
+
+TEST(Cli, HelpAndUsageErrors) {
+  const Result help = RunUbersim("--help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("run [WORLD]"), std::string::npos);
+  const Result none = RunUbersim("");
+  EXPECT_EQ(none.exit_code, 2);
+  const Result unknown = RunUbersim("fly");
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.output.find("unknown command 'fly'"), std::string::npos);
+  for (const char* cmd : {"run", "validate", "plugins"}) {
+    const Result r = RunUbersim(std::string(cmd) + " --help");
+    EXPECT_EQ(r.exit_code, 0) << cmd;
+    EXPECT_NE(r.output.find("usage: ubersim " + std::string(cmd)), std::string::npos) << cmd;
+  }
+  const Result bad_option = RunUbersim("run --no-such-option");
+  EXPECT_EQ(bad_option.exit_code, 2);
+}
+
+TEST(Cli, ValidateAcceptsEveryShippedModelFile) {
+  for (const auto& entry : fs::recursive_directory_iterator(kModels)) {
+    if (entry.path().extension() != ".yaml") continue;
+    const Result r = RunUbersim("validate " + entry.path().string());
+    EXPECT_EQ(r.exit_code, 0) << entry.path() << "\n" << r.output;
+    EXPECT_NE(r.output.find("ok: "), std::string::npos) << r.output;
+  }
+}
+
+TEST(Cli, ValidateReportsFileLineColumnAndKey) {
+  const fs::path dir = TempDir();
+  const fs::path ball = dir / "typo-ball.yaml";
+  std::ofstream(ball) << "kind: ball\nname: golf\nradius: 0.0215\nmasss: 0.046\n";
+  const Result r = RunUbersim("validate " + ball.string());
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find(ball.string() + ":4:1"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("masss"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, RunsTheDefaultWorldFastForAFixedDuration) {
+  const Result r = RunUbersim("run --fast --duration 2 --quiet");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("world 'div-b'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("stopped at sim time 2"), std::string::npos) << r.output;
+}
+
+TEST(Cli, RunPrintsAStatusLineWithSimTimeAndRealTimeFactor) {
+  const Result r = RunUbersim("run " + kModels + "/worlds/ssl-2003.yaml --speed 4 --duration 3");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("real-time factor"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("sim "), std::string::npos) << r.output;
+}
+
+TEST(Cli, RunRefusesABrokenWorldWithWhereAndWhy) {
+  const fs::path dir = TempDir();
+  const fs::path world = dir / "broken.yaml";
+  std::ofstream(world) << "kind: world\nname: broken\nfield: no-such-field.yaml\nball: "
+                       << kModels << "/balls/golf.yaml\n";
+  const Result r = RunUbersim("run " + world.string() + " --fast --duration 1");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find(world.string() + ":3:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no-such-field.yaml"), std::string::npos) << r.output;
+  const Result missing = RunUbersim("run " + (dir / "absent.yaml").string());
+  EXPECT_EQ(missing.exit_code, 3) << missing.output;
+  EXPECT_NE(missing.output.find("absent.yaml"), std::string::npos) << missing.output;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, PluginsListsTheSearchPath) {
+  const fs::path dir = TempDir();
+  const Result r = RunUbersim("plugins --plugin-path " + dir.string());
+  EXPECT_NE(r.output.find("search path:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(fs::canonical(dir).string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("PLUGIN"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+}  // namespace
