@@ -64,7 +64,9 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
   node_ = static_cast<NodeImpl*>(&team_node.AddChild(std::to_string(id_.id)));
   const RobotBodyInfo& b = m.body;
   const double length = b.height - b.ground_clearance;
-  rest_height_ = b.ground_clearance + 0.5 * length;
+  const double shell_centre = b.ground_clearance + 0.5 * length;
+  // The body origin is the centre of mass (ODE's convention); the shell sits around it.
+  rest_height_ = b.center_of_mass_height >= 0 ? b.center_of_mass_height : shell_centre;
 
   BodySpec chassis;
   chassis.name = "chassis";
@@ -75,6 +77,7 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
   shell.name = "shell";
   shell.shape = Shape::Cylinder(b.radius, length);
   shell.material = m.surface;
+  shell.offset.position = Vec3(0, 0, shell_centre - rest_height_);
   node_->AddGeom(shell, chassis_);
 
   auto add = [&](const std::optional<ComponentModel>& cm, PluginKind kind) {

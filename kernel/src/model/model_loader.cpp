@@ -265,6 +265,13 @@ struct ModelLoader::Impl {
     r->body.height = body["height"].AsDouble();
     r->body.front_distance = body.GetDouble("front_distance", r->body.radius);
     r->body.ground_clearance = body.GetDouble("ground_clearance", r->body.ground_clearance);
+    r->body.center_of_mass_height = body.GetDouble("center_of_mass_height", r->body.center_of_mass_height);
+    if (body.Has("center_of_mass_height") &&
+        (r->body.center_of_mass_height > body.GetDouble("height", 0.0))) {
+      throw ErrorAt(body["center_of_mass_height"], "the centre of mass (" +
+                                                       Metres(r->body.center_of_mass_height) +
+                                                       ") must not be above the robot's height");
+    }
     if (r->body.front_distance > r->body.radius) {
       throw ErrorAt(body["front_distance"], "the flat front (" + Metres(r->body.front_distance) +
                                                 " from the centre) lies outside the radius (" +

@@ -30,6 +30,8 @@ struct RobotBodyInfo {
   double height = 0.15;            ///< m
   double front_distance = 0.07;    ///< centre to the flat front (dribbler/kicker face), m
   double ground_clearance = 0.0;   ///< chassis bottom above the carpet, m
+  /// Centre of mass above the carpet, m (the chassis body's origin); < 0: the chassis' centre.
+  double center_of_mass_height = -1.0;
 };
 
 /// One contact a component asked to observe, as the collision manager finds it.

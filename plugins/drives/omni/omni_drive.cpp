@@ -1,0 +1,246 @@
+// SPDX-License-Identifier: Apache-2.0
+// omni: an omni-directional drive with any number of omni wheels at any angles.
+//
+// Each wheel is a body on a motorised hinge. Its contact with the carpet has high friction along
+// the rolling direction and low friction along the axle (the free rollers), which ODE models as
+// directional friction: the geometry's friction axis is the axle. A local servo loop turns the
+// move command into a velocity setpoint limited in speed, acceleration and braking, and the
+// setpoint into wheel speeds through the wheel geometry, as the robots' firmware does.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <ubersim/ubersim.hpp>
+
+#include "ubersim_plugin_schema.hpp"
+
+namespace {
+
+using ubersim::Vec3;
+
+struct Wheel {
+  double angle = 0;            // rad, from forward, counter-clockwise
+  Vec3 tangent;                // rolling direction in the robot frame (counter-clockwise)
+  ubersim::Joint* hinge = nullptr;
+};
+
+// Moves `value` toward `target`, by at most accel·dt when speeding up and brake·dt when slowing
+// down (or reversing), so the setpoint follows the robot's real limits.
+double Ramp(double value, double target, double accel, double brake, double dt) {
+  const bool slowing = std::abs(target) < std::abs(value) || target * value < 0;
+  const double step = (slowing ? brake : accel) * dt;
+  return value + std::clamp(target - value, -step, step);
+}
+
+class OmniDrive final : public ubersim::Drive {
+ public:
+  void Configure(ubersim::RobotContext& ctx) override {
+    ctx_ = &ctx;
+    const ubersim::ParamView& p = ctx.Params();
+    const ubersim::RobotBodyInfo& body = ctx.BodyInfo();
+    wheel_radius_ = p["wheel_radius"].AsDouble();
+    const double width = p.GetDouble("wheel_width", 0.01);
+    const double mass = p.GetDouble("wheel_mass", 0.05);
+    distance_ = p.Has("wheel_distance") ? p["wheel_distance"].AsDouble() : body.radius - width;
+    if (p.Has("motor")) {
+      max_torque_ = p["motor"].GetDouble("max_torque", max_torque_);
+      max_wheel_speed_ = p["motor"].GetDouble("max_speed", max_wheel_speed_);
+    }
+    if (p.Has("limits")) {
+      const ubersim::ParamView l = p["limits"];
+      max_speed_ = l.GetDouble("max_speed", max_speed_);
+      max_accel_ = l.GetDouble("max_accel", max_accel_);
+      max_brake_ = l.GetDouble("max_brake", max_brake_);
+      max_spin_ = l.GetDouble("max_angular_speed", max_spin_);
+      max_spin_accel_ = l.GetDouble("max_angular_accel", max_spin_accel_);
+      max_spin_brake_ = l.GetDouble("max_angular_brake", max_spin_brake_);
+    }
+    command_timeout_ = p.GetDouble("command_timeout", command_timeout_);
+    ubersim::SurfaceMaterial surface;
+    surface.name = "omni_wheel";
+    surface.mu = 0.05;   // along the friction axis = the axle
+    surface.mu2 = 0.8;   // across it = the rolling direction
+    if (p.Has("surface")) {
+      const ubersim::ParamView s = p["surface"];
+      surface.name = s.GetString("name", surface.name);
+      surface.mu = s.GetDouble("mu_axle", surface.mu);
+      surface.mu2 = s.GetDouble("mu_roll", surface.mu2);
+    }
+    if (wheel_radius_ * 2 <= body.ground_clearance) {
+      throw ubersim::PluginError("wheel_radius " + std::to_string(wheel_radius_) +
+                                 " m leaves the wheels above the carpet (ground_clearance " +
+                                 std::to_string(body.ground_clearance) + " m)");
+    }
+
+    ubersim::Body& chassis = ctx.Chassis();
+    const ubersim::Pose chassis_pose = chassis.GetPose();
+    // The robot stands on the carpet at z = 0; the chassis origin (its centre of mass) is this high.
+    const double chassis_z = chassis_pose.position.z();
+    const ubersim::ParamView list = p["wheels"];
+    for (std::size_t i = 0; i < list.Size(); ++i) {
+      Wheel w;
+      w.angle = list.At(i)["angle_deg"].AsDouble() * M_PI / 180.0;
+      const Vec3 radial(std::cos(w.angle), std::sin(w.angle), 0.0);
+      w.tangent = Vec3(-std::sin(w.angle), std::cos(w.angle), 0.0);
+      const Vec3 centre_local = radial * distance_ + Vec3(0, 0, wheel_radius_ - chassis_z);
+      // The cylinder's z axis is the axle, pointing inward: a positive hinge rate then rolls the
+      // robot along `tangent` (counter-clockwise about its centre).
+      const ubersim::Quat axle_local = ubersim::Quat::FromTwoVectors(Vec3::UnitZ(), -radial);
+
+      ubersim::SceneNode& node = ctx.Node().AddChild("wheel" + std::to_string(i));
+      ubersim::BodySpec bs;
+      bs.name = "wheel";
+      bs.mass = ubersim::MassSpec::Solid(ubersim::Shape::Cylinder(wheel_radius_, width), mass);
+      bs.pose = chassis_pose.Compose(ubersim::Pose{centre_local, axle_local});
+      bs.twist = chassis.GetTwist();
+      ubersim::Body& wheel = node.AddBody(bs);
+      // Two geometries per wheel. A wide cylinder on a plane touches it at both rims, and the
+      // inner rim then sets the turning radius (a robot turning in place ran 6 % fast). A real
+      // omni wheel touches at one roller under the axle: the carpet sees a sphere of the wheel's
+      // radius (one contact straight below the centre), everything else sees the cylinder.
+      ubersim::GeomSpec tyre;
+      tyre.name = "tyre";
+      tyre.shape = ubersim::Shape::Cylinder(wheel_radius_, width);
+      tyre.material = surface;
+      tyre.friction_axis = Vec3::UnitZ();  // body frame: the axle
+      ubersim::Geom& tyre_geom = node.AddGeom(tyre, &wheel);
+      ubersim::GeomSpec roller = tyre;
+      roller.name = "roller_contact";
+      roller.shape = ubersim::Shape::Sphere(wheel_radius_);
+      ubersim::Geom& roller_geom = node.AddGeom(roller, &wheel);
+      auto on_carpet = [](const ubersim::Contact& c) {
+        return c.other->GetShape().kind == ubersim::Shape::Kind::kPlane;
+      };
+      ctx.ObserveContacts(tyre_geom, [on_carpet](const ubersim::Contact& c, ubersim::SurfaceMaterial&,
+                                                 bool& accept) { accept = accept && !on_carpet(c); });
+      ctx.ObserveContacts(roller_geom, [on_carpet](const ubersim::Contact& c, ubersim::SurfaceMaterial&,
+                                                   bool& accept) { accept = accept && on_carpet(c); });
+      ubersim::JointSpec js;
+      js.name = "axle";
+      js.kind = ubersim::JointKind::kHinge;
+      js.parent = &chassis;
+      js.child = &wheel;
+      js.anchor = bs.pose.position;
+      js.axis = bs.pose.orientation * Vec3::UnitZ();
+      w.hinge = &node.AddJoint(js);
+      w.hinge->SetMotor(0.0, max_torque_);  // a powered-off robot still holds its wheels
+      wheels_.push_back(w);
+    }
+    // Least-squares inverse of the wheel geometry, for odometry feedback.
+    Eigen::MatrixXd m(wheels_.size(), 3);
+    for (std::size_t i = 0; i < wheels_.size(); ++i) {
+      m.row(static_cast<Eigen::Index>(i)) << wheels_[i].tangent.x(), wheels_[i].tangent.y(), distance_;
+    }
+    geometry_ = m / wheel_radius_;
+    inverse_ = geometry_.completeOrthogonalDecomposition().pseudoInverse();
+  }
+
+  void SetCommand(const ubersim::MoveCommand& command) override {
+    if (const auto* w = std::get_if<ubersim::WheelSpeedCommand>(&command)) {
+      if (w->wheel_speeds.size() != wheels_.size()) {
+        throw ubersim::PluginError("wheel speed command has " + std::to_string(w->wheel_speeds.size()) +
+                                   " speeds, this robot has " + std::to_string(wheels_.size()) + " wheels");
+      }
+    }
+    command_ = command;
+    last_command_ = ctx_->SimTime();
+    has_command_ = true;
+  }
+
+  ubersim::DriveFeedback Feedback() const override {
+    ubersim::DriveFeedback f;
+    Eigen::VectorXd speeds(static_cast<Eigen::Index>(wheels_.size()));
+    for (std::size_t i = 0; i < wheels_.size(); ++i) {
+      f.wheel_speeds.push_back(wheels_[i].hinge->Rate());
+      speeds(static_cast<Eigen::Index>(i)) = f.wheel_speeds.back();
+    }
+    const Eigen::Vector3d v = inverse_ * speeds;  // forward, left, angular
+    f.local_velocity.linear = Vec3(v.x(), v.y(), 0.0);
+    f.local_velocity.angular = Vec3(0.0, 0.0, v.z());
+    return f;
+  }
+
+  void Reset() override {
+    has_command_ = false;
+    setpoint_ = Vec3::Zero();
+  }
+
+  void PreStep(const ubersim::StepInfo& step) override {
+    const bool fresh = has_command_ && ctx_->SimTime() - last_command_ <= command_timeout_;
+    if (fresh) {
+      if (const auto* w = std::get_if<ubersim::WheelSpeedCommand>(&command_)) {
+        // Direct wheel speeds bypass the velocity loop, as on the real robots.
+        for (std::size_t i = 0; i < wheels_.size(); ++i) {
+          wheels_[i].hinge->SetMotor(std::clamp(w->wheel_speeds[i], -max_wheel_speed_, max_wheel_speed_),
+                                     max_torque_);
+        }
+        const Eigen::VectorXd speeds = Eigen::Map<const Eigen::VectorXd>(
+            w->wheel_speeds.data(), static_cast<Eigen::Index>(w->wheel_speeds.size()));
+        const Eigen::Vector3d v = inverse_ * speeds;
+        setpoint_ = Vec3(v.x(), v.y(), v.z());
+        return;
+      }
+    }
+    const Vec3 target = fresh ? TargetLocal() : Vec3::Zero();
+    // Linear: ramp the setpoint vector toward the target along the difference.
+    const Vec3 lin_now(setpoint_.x(), setpoint_.y(), 0.0);
+    const Vec3 lin_target(target.x(), target.y(), 0.0);
+    const Vec3 diff = lin_target - lin_now;
+    const bool slowing = lin_target.norm() < lin_now.norm() || lin_target.dot(lin_now) < 0;
+    const double max_step = (slowing ? max_brake_ : max_accel_) * step.dt;
+    const Vec3 lin = diff.norm() <= max_step ? lin_target : lin_now + diff * (max_step / diff.norm());
+    const double spin = Ramp(setpoint_.z(), target.z(), max_spin_accel_, max_spin_brake_, step.dt);
+    setpoint_ = Vec3(lin.x(), lin.y(), spin);
+
+    const Eigen::VectorXd wheel_targets = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
+    // Keep the direction when a wheel would exceed its speed: scale all wheels together.
+    const double peak = wheel_targets.cwiseAbs().maxCoeff();
+    const double scale = peak > max_wheel_speed_ ? max_wheel_speed_ / peak : 1.0;
+    for (std::size_t i = 0; i < wheels_.size(); ++i) {
+      wheels_[i].hinge->SetMotor(scale * wheel_targets(static_cast<Eigen::Index>(i)), max_torque_);
+    }
+  }
+
+ private:
+  // The command as (forward, left, angular) in the robot frame, within the speed limits.
+  Vec3 TargetLocal() const {
+    Vec3 t = Vec3::Zero();
+    if (const auto* l = std::get_if<ubersim::LocalVelocityCommand>(&command_)) {
+      t = Vec3(l->forward, l->left, l->angular);
+    } else if (const auto* g = std::get_if<ubersim::GlobalVelocityCommand>(&command_)) {
+      const double yaw = ctx_->Chassis().GetPose().Yaw();
+      const double c = std::cos(yaw), s = std::sin(yaw);
+      t = Vec3(c * g->x + s * g->y, -s * g->x + c * g->y, g->angular);
+    }
+    const double speed = std::hypot(t.x(), t.y());
+    if (speed > max_speed_) {
+      t.x() *= max_speed_ / speed;
+      t.y() *= max_speed_ / speed;
+    }
+    t.z() = std::clamp(t.z(), -max_spin_, max_spin_);
+    return t;
+  }
+
+  ubersim::RobotContext* ctx_ = nullptr;
+  std::vector<Wheel> wheels_;
+  Eigen::MatrixXd geometry_;   // wheel speeds (rad/s) = geometry_ · (forward, left, angular)
+  Eigen::MatrixXd inverse_;    // (forward, left, angular) = inverse_ · wheel speeds
+  double wheel_radius_ = 0.029;
+  double distance_ = 0.08;
+  double max_torque_ = 0.5;
+  double max_wheel_speed_ = 150;
+  double max_speed_ = 3.0, max_accel_ = 3.0, max_brake_ = 6.0;
+  double max_spin_ = 10.0, max_spin_accel_ = 50.0, max_spin_brake_ = 50.0;
+  double command_timeout_ = 0.1;
+  ubersim::MoveCommand command_;
+  double last_command_ = 0.0;
+  bool has_command_ = false;
+  Vec3 setpoint_ = Vec3::Zero();  // forward, left (m/s), angular (rad/s) the servo follows
+};
+
+}  // namespace
+
+UBERSIM_REGISTER_DRIVE(OmniDrive, "omni", "1.0.0", ubersim_plugin::kSchema)

@@ -1,0 +1,142 @@
+// SPDX-License-Identifier: Apache-2.0
+// The omni drive on the modern four-wheel robot: steady speeds forward, sideways, diagonally and
+// turning within 3 % of the command; speed-up following the acceleration limit within 5 %;
+// braking to a stop after the command timeout.
+#include <cmath>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "ubersim/kernel/logging.hpp"
+#include "ubersim/kernel/model.hpp"
+#include "ubersim/kernel/world.hpp"
+
+namespace ubersim::kernel {
+namespace {
+
+constexpr const char* kRobot = UBERSIM_SOURCE_DIR "/models/robots/ssl-omni-2026.yaml";
+
+struct OmniWorld {
+  std::ostringstream text;
+  StreamLog log{text, LogLevel::kWarning};
+  PluginRegistry registry{{UBERSIM_PLUGIN_BUILD_DIR}};
+  std::unique_ptr<World> world;
+
+  OmniWorld() {
+    const ModelLoader loader(ModelLoader::DefaultSchemaDir(),
+                             [this](PluginKind k, const std::string& id) {
+                               return registry.Find(k, id).schema_json;
+                             });
+    WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml");
+    model.robots.clear();
+    model.robots.push_back(RobotPlacement{{Team::kBlue, 0}, loader.LoadRobot(kRobot), -2.0, 0.0, 0.0, true});
+    model.ball_start = Vec3(3.5, 2.5, 0);  // out of the way
+    world = std::make_unique<World>(model, registry, log, false);
+  }
+  RobotState Robot() const { return world->Snapshot().robots.at(0); }
+  // Sends the command every 10 ms (a 100 Hz radio) for `seconds`.
+  void Drive(const MoveCommand& c, double seconds) {
+    const int steps = static_cast<int>(std::lround(seconds / 0.001));
+    for (int i = 0; i < steps; ++i) {
+      if (i % 10 == 0) world->events().Post(CommandEvent{{Team::kBlue, 0}, c, {}, {}});
+      world->Step();
+    }
+  }
+  Vec3 LocalVelocity() const {
+    const RobotState r = Robot();
+    return r.pose.orientation.conjugate() * r.twist.linear;
+  }
+};
+
+TEST(OmniDrive, RestsOnItsWheelsWithoutDrifting) {
+  OmniWorld w;
+  for (int i = 0; i < 1000; ++i) w.world->Step();
+  const RobotState r = w.Robot();
+  EXPECT_NEAR(r.pose.position.x(), -2.0, 0.002);
+  EXPECT_NEAR(r.pose.position.y(), 0.0, 0.002);
+  // chassis centre: clearance 0.015 + half of (0.146 - 0.015)
+  EXPECT_NEAR(r.pose.position.z(), 0.05, 0.003);  // the centre of mass height
+  EXPECT_LT(r.twist.linear.norm(), 0.005);
+}
+
+struct VelocityCase {
+  const char* name;
+  double forward, left, angular;
+};
+
+class OmniSteadyVelocity : public ::testing::TestWithParam<VelocityCase> {};
+
+TEST_P(OmniSteadyVelocity, WithinThreePercentOfTheCommand) {
+  const VelocityCase c = GetParam();
+  OmniWorld w;
+  w.Drive(LocalVelocityCommand{c.forward, c.left, c.angular}, 1.5);
+  // Average over the next 0.5 s.
+  Vec3 sum = Vec3::Zero();
+  double spin = 0;
+  const int n = 50;
+  for (int k = 0; k < n; ++k) {
+    w.Drive(LocalVelocityCommand{c.forward, c.left, c.angular}, 0.01);
+    sum += w.LocalVelocity();
+    spin += w.Robot().twist.angular.z();
+  }
+  const Vec3 v = sum / n;
+  spin /= n;
+  const double speed = std::hypot(c.forward, c.left);
+  if (speed > 0) {
+    EXPECT_NEAR(v.x(), c.forward, 0.03 * speed) << c.name;
+    EXPECT_NEAR(v.y(), c.left, 0.03 * speed) << c.name;
+  }
+  if (c.angular != 0) {
+    EXPECT_NEAR(spin, c.angular, 0.03 * std::abs(c.angular)) << c.name;
+  } else {
+    EXPECT_NEAR(spin, 0.0, 0.05) << c.name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Commands, OmniSteadyVelocity,
+    ::testing::Values(VelocityCase{"forward", 1.0, 0.0, 0.0}, VelocityCase{"fast_forward", 2.5, 0.0, 0.0},
+                      VelocityCase{"sideways", 0.0, 1.0, 0.0}, VelocityCase{"diagonal", 1.0, -1.0, 0.0},
+                      VelocityCase{"turning", 0.0, 0.0, 4.0}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+TEST(OmniDrive, SpeedUpFollowsTheAccelerationLimit) {
+  OmniWorld w;
+  // Commanded 2 m/s forward: with a 3 m/s² limit the robot needs 0.667 s.
+  std::vector<double> t, v;
+  for (int k = 0; k < 60; ++k) {
+    w.Drive(LocalVelocityCommand{2.0, 0.0, 0.0}, 0.01);
+    t.push_back(0.01 * (k + 1));
+    v.push_back(w.LocalVelocity().x());
+  }
+  // Fit the slope between 20 % and 80 % of the final speed.
+  double st = 0, sv = 0, stt = 0, stv = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (v[i] < 0.4 || v[i] > 1.6) continue;
+    st += t[i]; sv += v[i]; stt += t[i] * t[i]; stv += t[i] * v[i]; ++n;
+  }
+  ASSERT_GT(n, 10);
+  const double slope = (n * stv - st * sv) / (n * stt - st * st);
+  EXPECT_NEAR(slope, 3.0, 0.05 * 3.0);
+}
+
+TEST(OmniDrive, BrakesToAStopAfterTheCommandTimeout) {
+  OmniWorld w;
+  w.Drive(LocalVelocityCommand{1.5, 0.0, 0.0}, 1.0);
+  EXPECT_GT(w.LocalVelocity().x(), 1.4);
+  // No more commands: after 0.1 s the servo brakes at 6 m/s² (0.25 s from 1.5 m/s).
+  for (int i = 0; i < 600; ++i) w.world->Step();
+  EXPECT_LT(w.Robot().twist.linear.norm(), 0.02);
+}
+
+TEST(OmniDrive, WheelSpeedCommandMustMatchTheWheelCount) {
+  OmniWorld w;
+  w.world->events().Post(CommandEvent{{Team::kBlue, 0}, WheelSpeedCommand{{1.0, 2.0, 3.0}}, {}, {}});
+  w.world->ProcessEvents();
+  EXPECT_EQ(w.world->event_counters().rejected, 1);
+  EXPECT_NE(w.text.str().find("3 speeds, this robot has 4 wheels"), std::string::npos) << w.text.str();
+}
+
+}  // namespace
+}  // namespace ubersim::kernel
