@@ -131,7 +131,8 @@ TEST_F(Loader, EveryShippedModelFileValidates) {
 
 TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   const fs::path file = kModels / "worlds/div-b.yaml";
-  const auto w = loader_.LoadWorld(file);
+  // The shipped robots' drive blocks are checked by the real plugin's schema elsewhere.
+  const auto w = ModelLoader(kSchemas, kAnyPlugin).LoadWorld(file);
   EXPECT_EQ(w.file, file.string());
   EXPECT_EQ(w.name, "div-b");
   ASSERT_TRUE(w.field);
@@ -177,7 +178,10 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   EXPECT_DOUBLE_EQ(b.surface.mu2, -1.0);  // SurfaceMaterial default
 
   EXPECT_EQ(w.ball_start, ubersim::Vec3::Zero());
-  EXPECT_TRUE(w.robots.empty());
+  ASSERT_EQ(w.robots.size(), 12u);  // 2 × 6
+  EXPECT_EQ(w.robots[0].id, (ubersim::RobotId{ubersim::Team::kBlue, 0}));
+  EXPECT_EQ(w.robots[6].id, (ubersim::RobotId{ubersim::Team::kYellow, 0}));
+  EXPECT_EQ(w.robots[0].model->drive->plugin, "omni");
   EXPECT_DOUBLE_EQ(w.physics.step, 0.001);
   EXPECT_EQ(w.physics.solver_iterations, 20);
   EXPECT_DOUBLE_EQ(w.physics.erp, 0.2);
@@ -191,7 +195,7 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   EXPECT_TRUE(w.perception.IsObject());
   EXPECT_EQ(w.perception.Size(), 0u);
 
-  ASSERT_EQ(w.material_pairs.size(), 8u);
+  ASSERT_EQ(w.material_pairs.size(), 9u);
   const auto& bc = w.material_pairs[0];
   EXPECT_EQ(bc.a, "ball");
   EXPECT_EQ(bc.b, "carpet");
@@ -210,7 +214,7 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
 }
 
 TEST_F(Loader, DivAHasADeeperMarginBehindTheGoalLines) {
-  const auto w = loader_.LoadWorld(kModels / "worlds/div-a.yaml");
+  const auto w = ModelLoader(kSchemas, kAnyPlugin).LoadWorld(kModels / "worlds/div-a.yaml");
   const auto& g = w.field->geometry;
   EXPECT_DOUBLE_EQ(g.field_length, 12.0);
   EXPECT_DOUBLE_EQ(g.field_width, 9.0);
