@@ -11,7 +11,7 @@ cd "$(dirname "$0")"
 # Everything the build, the tests and the tools need, from Debian only.
 PACKAGES=(
   g++ cmake ninja-build pkg-config git
-  libode-dev libeigen3-dev liburdfdom-dev libassimp-dev
+  libode-dev libeigen3-dev liburdfdom-dev libtinyxml-dev libconsole-bridge-dev libassimp-dev
   libboost-dev libboost-program-options-dev
   libyaml-cpp-dev rapidjson-dev
   libprotobuf-dev protobuf-compiler

@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "robot.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <exception>
 
 #include "ubersim/error.hpp"
+#include "ubersim/kernel/urdf.hpp"
 
 namespace ubersim::kernel {
 
@@ -62,23 +65,11 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
     : id_(placement.id), model_(placement.model), present_(placement.present) {
   const RobotModel& m = *model_;
   node_ = static_cast<NodeImpl*>(&team_node.AddChild(std::to_string(id_.id)));
-  const RobotBodyInfo& b = m.body;
-  const double length = b.height - b.ground_clearance;
-  const double shell_centre = b.ground_clearance + 0.5 * length;
-  // The body origin is the centre of mass (ODE's convention); the shell sits around it.
-  rest_height_ = b.center_of_mass_height >= 0 ? b.center_of_mass_height : shell_centre;
-
-  BodySpec chassis;
-  chassis.name = "chassis";
-  chassis.mass = MassSpec::Solid(Shape::Cylinder(b.radius, length), b.mass);
-  chassis.pose = Pose::FromYaw(Vec3(placement.x, placement.y, rest_height_), placement.yaw);
-  chassis_ = static_cast<BodyImpl*>(&node_->AddBody(chassis));
-  GeomSpec shell;
-  shell.name = "shell";
-  shell.shape = Shape::Cylinder(b.radius, length);
-  shell.material = m.surface;
-  shell.offset.position = Vec3(0, 0, shell_centre - rest_height_);
-  node_->AddGeom(shell, chassis_);
+  if (m.urdf_file.empty()) {
+    BuildCylinderChassis(placement);
+  } else {
+    BuildUrdfBodies(placement);
+  }
 
   auto add = [&](const std::optional<ComponentModel>& cm, PluginKind kind) {
     if (!cm) return;
@@ -121,6 +112,81 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
   if (!present_) {
     present_ = true;
     SetPresent(false);
+  }
+}
+
+void Robot::BuildCylinderChassis(const RobotPlacement& placement) {
+  const RobotBodyInfo& b = model_->body;
+  const double length = b.height - b.ground_clearance;
+  const double shell_centre = b.ground_clearance + 0.5 * length;
+  // The body origin is the centre of mass (ODE's convention); the shell sits around it.
+  rest_height_ = b.center_of_mass_height >= 0 ? b.center_of_mass_height : shell_centre;
+  BodySpec chassis;
+  chassis.name = "chassis";
+  chassis.mass = MassSpec::Solid(Shape::Cylinder(b.radius, length), b.mass);
+  chassis.pose = Pose::FromYaw(Vec3(placement.x, placement.y, rest_height_), placement.yaw);
+  chassis_ = static_cast<BodyImpl*>(&node_->AddBody(chassis));
+  GeomSpec shell;
+  shell.name = "shell";
+  shell.shape = Shape::Cylinder(b.radius, length);
+  shell.material = model_->surface;
+  shell.offset.position = Vec3(0, 0, shell_centre - rest_height_);
+  node_->AddGeom(shell, chassis_);
+}
+
+void Robot::BuildUrdfBodies(const RobotPlacement& placement) {
+  const UrdfRobot urdf = LoadUrdf(model_->urdf_file);
+  const UrdfLink& root = urdf.links.front();
+  if (std::abs(root.mass.mass - model_->body.mass) > 0.01 * model_->body.mass) {
+    throw ModelError(model_->file, 0, 0, "body.mass",
+                     "body.mass " + std::to_string(model_->body.mass) + " kg differs from the URDF root link '" +
+                         root.name + "' mass " + std::to_string(root.mass.mass) + " kg (" + urdf.file + ")");
+  }
+  // The root link's frame stands on the carpet where the robot is placed.
+  const Pose ground = Pose::FromYaw(Vec3(placement.x, placement.y, 0.0), placement.yaw);
+  std::map<std::string, BodyImpl*> bodies;
+  for (std::size_t i = 0; i < urdf.links.size(); ++i) {
+    const UrdfLink& link = urdf.links[i];
+    const bool is_root = i == 0;
+    NodeImpl& owner = is_root ? *node_ : static_cast<NodeImpl&>(node_->AddChild(link.name));
+    const Pose com_in_root = link.pose.Compose(link.inertial_origin);
+    BodySpec spec;
+    spec.name = is_root ? "chassis" : link.name;
+    spec.mass = link.mass;
+    spec.pose = ground.Compose(com_in_root);
+    auto* body = static_cast<BodyImpl*>(&owner.AddBody(spec));
+    bodies[link.name] = body;
+    if (is_root) {
+      chassis_ = body;
+      rest_height_ = com_in_root.position.z();
+    }
+    // Geometry offsets are relative to the body origin, the COM.
+    const Pose com_inverse{-(link.inertial_origin.orientation.conjugate() * link.inertial_origin.position),
+                           link.inertial_origin.orientation.conjugate()};
+    for (std::size_t c = 0; c < link.collisions.size(); ++c) {
+      GeomSpec g;
+      g.name = (is_root ? std::string("shell") : link.name) + (c ? "_" + std::to_string(c) : "");
+      g.shape = link.collisions[c].shape;
+      g.offset = com_inverse.Compose(link.collisions[c].origin);
+      g.material = model_->surface;
+      owner.AddGeom(g, body);
+    }
+  }
+  for (const UrdfJoint& j : urdf.joints) {
+    const auto link_it = std::find_if(urdf.links.begin(), urdf.links.end(),
+                                      [&](const UrdfLink& l) { return l.name == j.child; });
+    const Pose child_frame = ground.Compose(link_it->pose);
+    JointSpec spec;
+    spec.name = j.name;
+    spec.kind = j.kind;
+    spec.parent = bodies.at(j.parent);
+    spec.child = bodies.at(j.child);
+    spec.anchor = child_frame.position;
+    spec.axis = child_frame.orientation * (j.axis.norm() > 0 ? j.axis.normalized() : Vec3::UnitX());
+    spec.lower_limit = j.lower;
+    spec.upper_limit = j.upper;
+    NodeImpl* owner = node_->FindChildNode(j.child);  // the child link's node holds the joint
+    (owner ? owner : node_)->AddJoint(spec);
   }
 }
 

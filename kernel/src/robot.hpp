@@ -57,6 +57,8 @@ class Robot {
   class Context;
   struct Part;
   void RunPhase(bool pre, const StepInfo& step);
+  void BuildCylinderChassis(const RobotPlacement& placement);
+  void BuildUrdfBodies(const RobotPlacement& placement);
 
   RobotId id_;
   std::shared_ptr<const RobotModel> model_;

@@ -7,46 +7,10 @@
 
 #include <gtest/gtest.h>
 
-#include "ubersim/kernel/logging.hpp"
-#include "ubersim/kernel/model.hpp"
-#include "ubersim/kernel/world.hpp"
+#include "omni_world.hpp"
 
 namespace ubersim::kernel {
 namespace {
-
-constexpr const char* kRobot = UBERSIM_SOURCE_DIR "/models/robots/ssl-omni-2026.yaml";
-
-struct OmniWorld {
-  std::ostringstream text;
-  StreamLog log{text, LogLevel::kWarning};
-  PluginRegistry registry{{UBERSIM_PLUGIN_BUILD_DIR}};
-  std::unique_ptr<World> world;
-
-  OmniWorld() {
-    const ModelLoader loader(ModelLoader::DefaultSchemaDir(),
-                             [this](PluginKind k, const std::string& id) {
-                               return registry.Find(k, id).schema_json;
-                             });
-    WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml");
-    model.robots.clear();
-    model.robots.push_back(RobotPlacement{{Team::kBlue, 0}, loader.LoadRobot(kRobot), -2.0, 0.0, 0.0, true});
-    model.ball_start = Vec3(3.5, 2.5, 0);  // out of the way
-    world = std::make_unique<World>(model, registry, log, false);
-  }
-  RobotState Robot() const { return world->Snapshot().robots.at(0); }
-  // Sends the command every 10 ms (a 100 Hz radio) for `seconds`.
-  void Drive(const MoveCommand& c, double seconds) {
-    const int steps = static_cast<int>(std::lround(seconds / 0.001));
-    for (int i = 0; i < steps; ++i) {
-      if (i % 10 == 0) world->events().Post(CommandEvent{{Team::kBlue, 0}, c, {}, {}});
-      world->Step();
-    }
-  }
-  Vec3 LocalVelocity() const {
-    const RobotState r = Robot();
-    return r.pose.orientation.conjugate() * r.twist.linear;
-  }
-};
 
 TEST(OmniDrive, RestsOnItsWheelsWithoutDrifting) {
   OmniWorld w;

@@ -283,6 +283,14 @@ struct ModelLoader::Impl {
                                                   ") must be less than the height (" +
                                                   Metres(r->body.height) + ")");
     }
+    if (v.Has("urdf")) {
+      fs::path urdf = v["urdf"].AsString();
+      if (urdf.is_relative()) urdf = file.parent_path() / urdf;
+      if (const std::string why = Unreadable(urdf); !why.empty()) {
+        throw ErrorAt(v["urdf"], "cannot open URDF file " + urdf.string() + ": " + why);
+      }
+      r->urdf_file = urdf.lexically_normal().string();
+    }
     r->surface = ReadSurface(v, "surface", "robot");
     r->drive = Component(v, "drive", PluginKind::kDrive);
     r->dribbler = Component(v, "dribbler", PluginKind::kDribbler);

@@ -69,6 +69,9 @@ struct RobotModel {
   std::string name;                        ///< e.g. "example-omni-2026"
   RobotBodyInfo body;                      ///< chassis dimensions and mass
   SurfaceMaterial surface;                 ///< chassis surface (name "robot" unless given)
+  /// URDF file (absolute) whose links, inertias, joints and collision meshes build the robot's
+  /// bodies instead of the `body:` cylinder; empty when the body is given inline.
+  std::string urdf_file;
   std::optional<ComponentModel> drive;     ///< the drive
   std::optional<ComponentModel> dribbler;  ///< optional dribbler
   std::optional<ComponentModel> kicker;    ///< optional kicker
