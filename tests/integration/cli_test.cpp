@@ -39,6 +39,7 @@ fs::path TempDir() {
 }
 
 const std::string kModels = UBERSIM_SOURCE_DIR "/models";
+const std::string kFakePlugins = UBERSIM_BINARY_DIR "/tests/plugins/fakes";
 
 TEST(Cli, HelpAndUsageErrors) {
   const Result help = RunUbersim("--help");
@@ -104,6 +105,30 @@ TEST(Cli, RunRefusesABrokenWorldWithWhereAndWhy) {
   const Result missing = RunUbersim("run " + (dir / "absent.yaml").string());
   EXPECT_EQ(missing.exit_code, 3) << missing.output;
   EXPECT_NE(missing.output.find("absent.yaml"), std::string::npos) << missing.output;
+  fs::remove_all(dir);
+}
+
+// A world whose robot names a plugin that throws when constructed: exit code 4, the library file
+// and the plugin's own message; `ubersim plugins` lists the good fakes and every refused file.
+TEST(Cli, RunRefusesABrokenPluginNamingTheFileAndTheReason) {
+  const fs::path dir = TempDir();
+  std::ofstream(dir / "robot.yaml") << "kind: robot\nname: fragile\n"
+                                       "body: {mass: 2.0, radius: 0.09, height: 0.15}\n"
+                                       "drive: {plugin: fake_throwing}\n";
+  std::ofstream(dir / "world.yaml") << "kind: world\nname: fragile\nfield: " << kModels
+                                    << "/fields/div-b.yaml\nball: " << kModels << "/balls/golf.yaml\n"
+                                    << "plugin_paths: [" << kFakePlugins << "]\n"
+                                    << "robots:\n  - {team: blue, id: 0, model: robot.yaml, x: 0, y: 1}\n";
+  const Result r = RunUbersim("run " + (dir / "world.yaml").string() + " --fast --duration 1");
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("libubersim_fake_throwing.so"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("constructor threw: no motor controller on /dev/ttyACM0"), std::string::npos)
+      << r.output;
+
+  const Result list = RunUbersim("plugins --plugin-path " + kFakePlugins);
+  EXPECT_NE(list.output.find("fake_good"), std::string::npos) << list.output;
+  EXPECT_NE(list.output.find("libubersim_fake_plain.so: not an ÜberSim plugin"), std::string::npos)
+      << list.output;
   fs::remove_all(dir);
 }
 

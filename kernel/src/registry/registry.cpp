@@ -59,6 +59,16 @@ bool IsPluginFileName(const fs::path& p) {
          name.compare(name.size() - 3, 3, kLibrarySuffix) == 0;
 }
 
+// The dynamic loader's own words from Boost.DLL's message ("… (dlerror system message: X): …").
+std::string LoaderMessage(const std::string& boost_message) {
+  const std::string tag = "dlerror system message: ";
+  const std::size_t start = boost_message.find(tag);
+  if (start == std::string::npos) return boost_message;
+  const std::size_t end = boost_message.rfind("):");
+  const std::size_t from = start + tag.size();
+  return boost_message.substr(from, end == std::string::npos || end < from ? std::string::npos : end - from);
+}
+
 // Checks a descriptor's fields; returns "" when acceptable, else the reason.
 std::string CheckDescriptor(const PluginDescriptor& d) {
   if (d.abi_word != kPluginAbiWord) {
@@ -137,11 +147,13 @@ const PluginInfo& PluginRegistry::LoadFile(const fs::path& file) {
   auto library = std::make_shared<boost::dll::shared_library>();
   try {
     // rtld_now: a missing symbol fails here, not in the middle of a match; rtld_local: plugins
-    // cannot see each other's symbols.
-    library->load(canonical, boost::dll::load_mode::rtld_now | boost::dll::load_mode::rtld_local);
+    // cannot see each other's symbols; RTLD_NODELETE: code of a plugin (a destructor, a thrown
+    // exception's type) stays mapped even if something outlives its last holder. glibc hides
+    // such bugs only by luck (STB_GNU_UNIQUE symbols), so make it explicit.
+    library->load(canonical, boost::dll::load_mode::rtld_now | boost::dll::load_mode::rtld_local |
+                                 static_cast<boost::dll::load_mode::type>(RTLD_NODELETE));
   } catch (const std::exception& e) {
-    const char* dl = dlerror();
-    throw PluginLoadError(where, std::string("cannot be loaded: ") + (dl ? dl : e.what()));
+    throw PluginLoadError(where, "cannot be loaded: " + LoaderMessage(e.what()));
   }
   if (!library->has(kAbiWordSymbol)) {
     throw PluginLoadError(where, std::string("not an ÜberSim plugin (no ") + kAbiWordSymbol + " symbol)");
