@@ -27,14 +27,6 @@ struct Wheel {
   ubersim::Joint* hinge = nullptr;
 };
 
-// Moves `value` toward `target`, by at most accel·dt when speeding up and brake·dt when slowing
-// down (or reversing), so the setpoint follows the robot's real limits.
-double Ramp(double value, double target, double accel, double brake, double dt) {
-  const bool slowing = std::abs(target) < std::abs(value) || target * value < 0;
-  const double step = (slowing ? brake : accel) * dt;
-  return value + std::clamp(target - value, -step, step);
-}
-
 class OmniDrive final : public ubersim::Drive {
  public:
   void Configure(ubersim::RobotContext& ctx) override {
@@ -49,16 +41,8 @@ class OmniDrive final : public ubersim::Drive {
       max_torque_ = p["motor"].GetDouble("max_torque", max_torque_);
       max_wheel_speed_ = p["motor"].GetDouble("max_speed", max_wheel_speed_);
     }
-    if (p.Has("limits")) {
-      const ubersim::ParamView l = p["limits"];
-      max_speed_ = l.GetDouble("max_speed", max_speed_);
-      max_accel_ = l.GetDouble("max_accel", max_accel_);
-      max_brake_ = l.GetDouble("max_brake", max_brake_);
-      max_spin_ = l.GetDouble("max_angular_speed", max_spin_);
-      max_spin_accel_ = l.GetDouble("max_angular_accel", max_spin_accel_);
-      max_spin_brake_ = l.GetDouble("max_angular_brake", max_spin_brake_);
-    }
-    command_timeout_ = p.GetDouble("command_timeout", command_timeout_);
+    if (p.Has("limits")) servo_.SetLimits(ubersim::ReadServoLimits(p["limits"], servo_.Limits()));
+    watchdog_.SetTimeout(p.GetDouble("command_timeout", watchdog_.Timeout()));
     ubersim::SurfaceMaterial surface;
     surface.name = "omni_wheel";
     surface.mu = 0.05;   // along the friction axis = the axle
@@ -146,8 +130,7 @@ class OmniDrive final : public ubersim::Drive {
       }
     }
     command_ = command;
-    last_command_ = ctx_->SimTime();
-    has_command_ = true;
+    watchdog_.Feed(ctx_->SimTime());
   }
 
   ubersim::DriveFeedback Feedback() const override {
@@ -164,12 +147,12 @@ class OmniDrive final : public ubersim::Drive {
   }
 
   void Reset() override {
-    has_command_ = false;
-    setpoint_ = Vec3::Zero();
+    watchdog_.Reset();
+    servo_.Reset();
   }
 
   void PreStep(const ubersim::StepInfo& step) override {
-    const bool fresh = has_command_ && ctx_->SimTime() - last_command_ <= command_timeout_;
+    const bool fresh = watchdog_.Fresh(ctx_->SimTime());
     if (fresh) {
       if (const auto* w = std::get_if<ubersim::WheelSpeedCommand>(&command_)) {
         // Direct wheel speeds bypass the velocity loop, as on the real robots.
@@ -180,20 +163,13 @@ class OmniDrive final : public ubersim::Drive {
         const Eigen::VectorXd speeds = Eigen::Map<const Eigen::VectorXd>(
             w->wheel_speeds.data(), static_cast<Eigen::Index>(w->wheel_speeds.size()));
         const Eigen::Vector3d v = inverse_ * speeds;
-        setpoint_ = Vec3(v.x(), v.y(), v.z());
+        servo_.Set({Eigen::Vector2d(v.x(), v.y()), v.z()});
         return;
       }
     }
-    const Vec3 target = fresh ? TargetLocal() : Vec3::Zero();
-    // Linear: ramp the setpoint vector toward the target along the difference.
-    const Vec3 lin_now(setpoint_.x(), setpoint_.y(), 0.0);
-    const Vec3 lin_target(target.x(), target.y(), 0.0);
-    const Vec3 diff = lin_target - lin_now;
-    const bool slowing = lin_target.norm() < lin_now.norm() || lin_target.dot(lin_now) < 0;
-    const double max_step = (slowing ? max_brake_ : max_accel_) * step.dt;
-    const Vec3 lin = diff.norm() <= max_step ? lin_target : lin_now + diff * (max_step / diff.norm());
-    const double spin = Ramp(setpoint_.z(), target.z(), max_spin_accel_, max_spin_brake_, step.dt);
-    setpoint_ = Vec3(lin.x(), lin.y(), spin);
+    const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
+    const Eigen::Vector2d lin = set.linear;
+    const double spin = set.angular;
 
     const Eigen::VectorXd wheel_targets = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
     // Keep the direction when a wheel would exceed its speed: scale all wheels together.
@@ -206,22 +182,16 @@ class OmniDrive final : public ubersim::Drive {
 
  private:
   // The command as (forward, left, angular) in the robot frame, within the speed limits.
-  Vec3 TargetLocal() const {
-    Vec3 t = Vec3::Zero();
+  ubersim::PlanarVelocity TargetLocal() const {
+    ubersim::PlanarVelocity t;
     if (const auto* l = std::get_if<ubersim::LocalVelocityCommand>(&command_)) {
-      t = Vec3(l->forward, l->left, l->angular);
+      t = {Eigen::Vector2d(l->forward, l->left), l->angular};
     } else if (const auto* g = std::get_if<ubersim::GlobalVelocityCommand>(&command_)) {
       const double yaw = ctx_->Chassis().GetPose().Yaw();
       const double c = std::cos(yaw), s = std::sin(yaw);
-      t = Vec3(c * g->x + s * g->y, -s * g->x + c * g->y, g->angular);
+      t = {Eigen::Vector2d(c * g->x + s * g->y, -s * g->x + c * g->y), g->angular};
     }
-    const double speed = std::hypot(t.x(), t.y());
-    if (speed > max_speed_) {
-      t.x() *= max_speed_ / speed;
-      t.y() *= max_speed_ / speed;
-    }
-    t.z() = std::clamp(t.z(), -max_spin_, max_spin_);
-    return t;
+    return servo_.ClampToLimits(t);
   }
 
   ubersim::RobotContext* ctx_ = nullptr;
@@ -232,13 +202,9 @@ class OmniDrive final : public ubersim::Drive {
   double distance_ = 0.08;
   double max_torque_ = 0.5;
   double max_wheel_speed_ = 150;
-  double max_speed_ = 3.0, max_accel_ = 3.0, max_brake_ = 6.0;
-  double max_spin_ = 10.0, max_spin_accel_ = 50.0, max_spin_brake_ = 50.0;
-  double command_timeout_ = 0.1;
+  ubersim::VelocityServo servo_;       // the (forward, left, angular) setpoint the wheels follow
+  ubersim::CommandWatchdog watchdog_{0.1};
   ubersim::MoveCommand command_;
-  double last_command_ = 0.0;
-  bool has_command_ = false;
-  Vec3 setpoint_ = Vec3::Zero();  // forward, left (m/s), angular (rad/s) the servo follows
 };
 
 }  // namespace

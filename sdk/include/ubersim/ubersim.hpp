@@ -8,6 +8,7 @@
 #include "ubersim/params.hpp"
 #include "ubersim/plugin.hpp"
 #include "ubersim/scene.hpp"
+#include "ubersim/servo.hpp"
 #include "ubersim/transport.hpp"
 #include "ubersim/version.hpp"
 #include "ubersim/world_state.hpp"

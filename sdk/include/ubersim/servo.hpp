@@ -1,0 +1,134 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Velocity-setpoint shaping for drive plugins: the local servo loop the robots' firmware runs
+// between a radio command and the wheel motors. Header-only.
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Core>
+
+#include "ubersim/params.hpp"
+
+namespace ubersim {
+inline namespace v1 {
+
+/// Moves `value` toward `target` by at most accel·dt when speeding up and brake·dt when slowing
+/// down or reversing. Speeds in m/s (or rad/s), accel and brake in m/s² (or rad/s²), dt in s.
+inline double RampScalar(double value, double target, double accel, double brake, double dt) {
+  const bool slowing = std::abs(target) < std::abs(value) || target * value < 0;
+  const double step = (slowing ? brake : accel) * dt;
+  return value + std::clamp(target - value, -step, step);
+}
+
+/// Moves the 2-D velocity `value` toward `target` along their difference, by at most accel·dt
+/// when speeding up and brake·dt when slowing down or reversing. m/s, m/s², s.
+inline Eigen::Vector2d RampVector(const Eigen::Vector2d& value, const Eigen::Vector2d& target,
+                                  double accel, double brake, double dt) {
+  const Eigen::Vector2d diff = target - value;
+  const bool slowing = target.norm() < value.norm() || target.dot(value) < 0;
+  const double max_step = (slowing ? brake : accel) * dt;
+  const double length = diff.norm();
+  return length <= max_step ? target : Eigen::Vector2d(value + diff * (max_step / length));
+}
+
+/// Limits of a planar velocity servo. Linear in m/s and m/s², angular in rad/s and rad/s².
+struct ServoLimits {
+  double max_speed = 3.0;           ///< largest linear speed, m/s
+  double max_accel = 3.0;           ///< linear speed-up limit, m/s²
+  double max_brake = 6.0;           ///< linear slow-down limit, m/s²
+  double max_angular_speed = 10.0;  ///< largest angular speed, rad/s
+  double max_angular_accel = 50.0;  ///< angular speed-up limit, rad/s²
+  double max_angular_brake = 50.0;  ///< angular slow-down limit, rad/s²
+};
+
+/// Reads a `limits:` block (keys as the ServoLimits members, SI) over `defaults`; absent keys keep theirs.
+inline ServoLimits ReadServoLimits(const ParamView& limits, ServoLimits defaults) {
+  defaults.max_speed = limits.GetDouble("max_speed", defaults.max_speed);
+  defaults.max_accel = limits.GetDouble("max_accel", defaults.max_accel);
+  defaults.max_brake = limits.GetDouble("max_brake", defaults.max_brake);
+  defaults.max_angular_speed = limits.GetDouble("max_angular_speed", defaults.max_angular_speed);
+  defaults.max_angular_accel = limits.GetDouble("max_angular_accel", defaults.max_angular_accel);
+  defaults.max_angular_brake = limits.GetDouble("max_angular_brake", defaults.max_angular_brake);
+  return defaults;
+}
+
+/// A planar velocity in the robot frame: linear (forward, left) in m/s, angular (ccw) in rad/s.
+struct PlanarVelocity {
+  Eigen::Vector2d linear = Eigen::Vector2d::Zero();  ///< forward (x), left (y), m/s
+  double angular = 0.0;                              ///< counter-clockwise, rad/s
+};
+
+/// The velocity setpoint a drive follows: targets are clamped to the speed limits, and the
+/// setpoint moves toward them within the acceleration and brake limits, step by step.
+class VelocityServo {
+ public:
+  /// A servo at rest with the given limits.
+  explicit VelocityServo(const ServoLimits& limits = {}) : limits_(limits) {}
+
+  /// Replaces the limits; the setpoint stays.
+  void SetLimits(const ServoLimits& limits) { limits_ = limits; }
+  /// The limits in use.
+  const ServoLimits& Limits() const { return limits_; }
+
+  /// `target` with its linear speed scaled down to max_speed (direction kept) and its angular
+  /// speed clamped to ±max_angular_speed.
+  PlanarVelocity ClampToLimits(PlanarVelocity target) const {
+    const double speed = std::hypot(target.linear.x(), target.linear.y());
+    if (speed > limits_.max_speed) {
+      target.linear.x() *= limits_.max_speed / speed;
+      target.linear.y() *= limits_.max_speed / speed;
+    }
+    target.angular = std::clamp(target.angular, -limits_.max_angular_speed, limits_.max_angular_speed);
+    return target;
+  }
+
+  /// Moves the setpoint one step of dt (s) toward `target` (clamp it first) and returns it.
+  const PlanarVelocity& Step(const PlanarVelocity& target, double dt) {
+    setpoint_.linear = RampVector(setpoint_.linear, target.linear, limits_.max_accel, limits_.max_brake, dt);
+    setpoint_.angular = RampScalar(setpoint_.angular, target.angular, limits_.max_angular_accel,
+                                   limits_.max_angular_brake, dt);
+    return setpoint_;
+  }
+
+  /// Sets the setpoint directly (e.g. from wheel-speed commands that bypass the loop).
+  void Set(const PlanarVelocity& setpoint) { setpoint_ = setpoint; }
+  /// The current setpoint.
+  const PlanarVelocity& Setpoint() const { return setpoint_; }
+  /// Back to rest.
+  void Reset() { setpoint_ = PlanarVelocity{}; }
+
+ private:
+  ServoLimits limits_;
+  PlanarVelocity setpoint_;
+};
+
+/// Command-timeout bookkeeping: a command is fresh for `timeout` seconds after it arrived; after
+/// that the drive should brake to a stop. Times in s (simulated).
+class CommandWatchdog {
+ public:
+  /// A watchdog with no command yet and the given timeout, s.
+  explicit CommandWatchdog(double timeout = 0.1) : timeout_(timeout) {}
+
+  /// Sets the timeout, s.
+  void SetTimeout(double timeout) { timeout_ = timeout; }
+  /// The timeout, s.
+  double Timeout() const { return timeout_; }
+  /// Records that a command arrived at time `now`, s.
+  void Feed(double now) {
+    last_ = now;
+    has_command_ = true;
+  }
+  /// True when a command arrived no more than the timeout before `now`, s.
+  bool Fresh(double now) const { return has_command_ && now - last_ <= timeout_; }
+  /// Forgets the last command.
+  void Reset() { has_command_ = false; }
+
+ private:
+  double timeout_;
+  double last_ = 0.0;
+  bool has_command_ = false;
+};
+
+}  // namespace v1
+}  // namespace ubersim
