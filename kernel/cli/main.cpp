@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <chrono>
+
 #include <boost/program_options.hpp>
 
 #include "ubersim/error.hpp"
@@ -20,6 +22,8 @@
 #include "ubersim/kernel/plugin_registry.hpp"
 #include "ubersim/kernel/runner.hpp"
 #include "ubersim/kernel/world.hpp"
+#include "ubersim/validation/report.hpp"
+#include "ubersim/validation/scenarios.hpp"
 
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
@@ -34,6 +38,7 @@ constexpr int kExitRuntime = 1;
 constexpr int kExitUsage = 2;
 constexpr int kExitModel = 3;
 constexpr int kExitPlugin = 4;
+constexpr int kExitOutOfBand = 5;
 
 // The one piece of process-wide state: set by SIGINT/SIGTERM, read by the run loop.
 std::atomic<bool>& StopRequested() {
@@ -51,9 +56,11 @@ const char* kTopHelp =
     "  run [WORLD]      run a world (default: models/worlds/div-b.yaml) in real time\n"
     "  validate FILE…   check model files (world, field, ball, robot) against their schemas\n"
     "  plugins          list every plugin found in the plugin search path\n"
+    "  validate-physics run the physics validation scenarios, write the report and plots\n"
     "\n"
     "`ubersim <command> --help` describes a command's options.\n"
-    "exit codes: 0 ok, 1 runtime error, 2 bad usage, 3 invalid model file, 4 plugin error\n";
+    "exit codes: 0 ok, 1 runtime error, 2 bad usage, 3 invalid model file, 4 plugin error,\n"
+    "            5 a validated physics number outside its band\n";
 
 std::vector<fs::path> ToPaths(const std::vector<std::string>& v) {
   return std::vector<fs::path>(v.begin(), v.end());
@@ -284,6 +291,88 @@ int PluginsCommand(const std::vector<std::string>& args) {
   return result.problems.empty() ? kExitOk : kExitPlugin;
 }
 
+int ValidatePhysicsCommand(const std::vector<std::string>& args) {
+  po::options_description desc(
+      "usage: ubersim validate-physics [options]\n\n"
+      "Runs the physics validation scenarios (ball slide/roll, chip flight and bounces, shots\n"
+      "against robots and walls, drives, dribbler, kicker, the 2003 paper's experiments) on the\n"
+      "shipped model files, prints each number against its published band, and writes a report\n"
+      "(README.md) with SVG plots. Exit code 5 when a number is outside its band.\n\noptions");
+  std::string out = "docs/validation";
+  std::vector<std::string> only, plugin_paths;
+  desc.add_options()("help,h", "this help")
+      ("out", po::value<std::string>(&out)->default_value(out), "folder for README.md and the plots")
+      ("only", po::value<std::vector<std::string>>(&only), "run only scenario ID (repeatable)")
+      ("list", "list the scenarios and exit")
+      ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(args).options(desc).run(), vm);
+    po::notify(vm);
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim validate-physics: " << e.what() << "\n\n" << desc << "\n";
+    return kExitUsage;
+  }
+  if (vm.count("help")) {
+    std::cout << desc << "\n";
+    return kExitOk;
+  }
+  if (vm.count("list")) {
+    for (const auto& s : validation::AllScenarios()) std::printf("%-24s %s\n", s.id.c_str(), s.title.c_str());
+    return kExitOk;
+  }
+  std::vector<const validation::Scenario*> chosen;
+  try {
+    for (const std::string& id : only) chosen.push_back(&validation::FindScenario(id));
+  } catch (const std::out_of_range& e) {
+    std::cerr << "ubersim validate-physics: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  if (chosen.empty()) {
+    for (const auto& s : validation::AllScenarios()) chosen.push_back(&s);
+  }
+  try {
+    std::ostringstream warnings;
+    StreamLog log(warnings, LogLevel::kWarning);
+    PluginRegistry registry(PluginRegistry::DefaultSearchPaths(ToPaths(plugin_paths)));
+    validation::Environment env{DataDir() / "models", ModelLoader::DefaultSchemaDir(), &registry, &log};
+    std::vector<validation::ScenarioResult> results;
+    int out_of_band = 0;
+    for (const validation::Scenario* s : chosen) {
+      const auto t0 = std::chrono::steady_clock::now();
+      results.push_back(s->run(env));
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const validation::ScenarioResult& r = results.back();
+      int ok = 0;
+      for (const auto& m : r.metrics) ok += m.Pass() ? 1 : 0;
+      std::printf("%-4s %-24s %d/%zu in band  (%.1f s)\n", r.Pass() ? "ok" : "OUT", r.id.c_str(), ok,
+                  r.metrics.size(), seconds);
+      for (const auto& m : r.metrics) {
+        if (m.Pass()) continue;
+        ++out_of_band;
+        std::printf("       %s = %.4g %s, band %.4g … %.4g (%s)\n", m.name.c_str(), m.value, m.unit.c_str(),
+                    m.low, m.high, m.basis.c_str());
+      }
+      std::fflush(stdout);
+    }
+    std::string command = "ubersim validate-physics";
+    for (const std::string& a : args) command += " " + a;
+    validation::WriteReport(out, results, command);
+    std::printf("report: %s\n", (fs::path(out) / "README.md").string().c_str());
+    if (!warnings.str().empty()) std::cerr << warnings.str();
+    return out_of_band ? kExitOutOfBand : kExitOk;
+  } catch (const ModelError& e) {
+    std::cerr << "ubersim validate-physics: invalid model: " << e.what() << "\n";
+    return kExitModel;
+  } catch (const PluginLoadError& e) {
+    std::cerr << "ubersim validate-physics: plugin error: " << e.what() << "\n";
+    return kExitPlugin;
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim validate-physics: " << e.what() << "\n";
+    return kExitRuntime;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -302,6 +391,7 @@ int main(int argc, char** argv) {
   if (command == "run") return RunCommand(args);
   if (command == "validate") return ValidateCommand(args);
   if (command == "plugins") return PluginsCommand(args);
+  if (command == "validate-physics") return ValidatePhysicsCommand(args);
   std::cerr << "ubersim: unknown command '" << command << "'\n\n" << kTopHelp;
   return kExitUsage;
 }

@@ -132,6 +132,23 @@ TEST(Cli, RunRefusesABrokenPluginNamingTheFileAndTheReason) {
   fs::remove_all(dir);
 }
 
+// The physics validation as a user runs it: a scenario's verdict line, the report and its plot.
+TEST(Cli, ValidatePhysicsWritesTheReportAndItsPlots) {
+  const fs::path dir = TempDir() / "report";
+  const Result r = RunUbersim("validate-physics --only chip_flight --out " + dir.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("ok   chip_flight"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "README.md"));
+  EXPECT_TRUE(fs::exists(dir / "chip-flight.svg"));
+  const Result bad = RunUbersim("validate-physics --only warp_drive --out " + dir.string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("no validation scenario 'warp_drive' (there are: ball_roll_2"), std::string::npos)
+      << bad.output;
+  const Result list = RunUbersim("validate-physics --list");
+  EXPECT_NE(list.output.find("no_tunnelling"), std::string::npos) << list.output;
+  fs::remove_all(dir.parent_path());
+}
+
 TEST(Cli, PluginsListsTheSearchPath) {
   const fs::path dir = TempDir();
   const Result r = RunUbersim("plugins --plugin-path " + dir.string());

@@ -1,0 +1,36 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ubersim/log.hpp"
+#include "ubersim/kernel/plugin_registry.hpp"
+#include "ubersim/validation/result.hpp"
+
+namespace ubersim::validation {
+
+/// What a scenario needs: the shipped model files, plugins and a log for warnings.
+struct Environment {
+  std::filesystem::path models_dir;      ///< folder with fields/, balls/, robots/, worlds/
+  std::filesystem::path schema_dir;      ///< folder with the model-file schemas
+  kernel::PluginRegistry* registry = nullptr;  ///< finds the robots' plugins
+  Log* log = nullptr;                    ///< warnings of the worlds built
+};
+
+/// A named scenario.
+struct Scenario {
+  std::string id;                                           ///< e.g. "ball_roll_2"
+  std::string title;                                        ///< one line
+  std::function<ScenarioResult(const Environment&)> run;    ///< builds its world and measures
+};
+
+/// Every scenario, in report order.
+const std::vector<Scenario>& AllScenarios();
+
+/// The scenario with that id; throws std::out_of_range listing the ids.
+const Scenario& FindScenario(const std::string& id);
+
+}  // namespace ubersim::validation

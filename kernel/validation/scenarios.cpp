@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: Apache-2.0
+// The list of validation scenarios, in the order the report shows them.
+#include "ubersim/validation/scenarios.hpp"
+
+#include <stdexcept>
+
+#include "ball_scenarios.hpp"
+#include "robot_scenarios.hpp"
+
+namespace ubersim::validation {
+
+const std::vector<Scenario>& AllScenarios() {
+  using namespace detail;
+  static const std::vector<Scenario> kAll = {
+      {"ball_roll_2", "Ball rolled at 2 m/s", [](const Environment& e) { return BallRoll(e, 2.0); }},
+      {"ball_roll_5", "Ball rolled at 5 m/s", [](const Environment& e) { return BallRoll(e, 5.0); }},
+      {"chip_flight", "Chip flight and bounces", ChipFlight},
+      {"no_tunnelling", "1000 shots at 6.5 m/s", [](const Environment& e) { return NoTunnelling(e, 1000); }},
+      {"omni_steady_velocity", "Omni robot steady velocities", OmniSteadyVelocity},
+      {"omni_acceleration", "Omni robot acceleration", OmniAcceleration},
+  };
+  return kAll;
+}
+
+const Scenario& FindScenario(const std::string& id) {
+  std::string ids;
+  for (const Scenario& s : AllScenarios()) {
+    if (s.id == id) return s;
+    ids += (ids.empty() ? "" : ", ") + s.id;
+  }
+  throw std::out_of_range("no validation scenario '" + id + "' (there are: " + ids + ")");
+}
+
+}  // namespace ubersim::validation

@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: Apache-2.0
+// Every physics-validation scenario, asserted: each number within its published band (the same
+// code and bands `ubersim validate-physics` writes into docs/validation/).
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "ball_scenarios.hpp"
+#include "ubersim/kernel/logging.hpp"
+#include "ubersim/validation/scenarios.hpp"
+
+namespace ubersim::validation {
+namespace {
+
+struct Env {
+  std::ostringstream text;
+  kernel::StreamLog log{text, LogLevel::kWarning};
+  kernel::PluginRegistry registry{{UBERSIM_PLUGIN_BUILD_DIR}};
+  Environment env{UBERSIM_SOURCE_DIR "/models", UBERSIM_SOURCE_DIR "/schemas", &registry, &log};
+};
+
+// Runs a scenario and checks every metric against its band, naming the ones outside.
+ScenarioResult RunAndCheck(const std::string& id) {
+  Env e;
+  ScenarioResult r = FindScenario(id).run(e.env);
+  EXPECT_EQ(r.id, id);
+  EXPECT_FALSE(r.metrics.empty());
+  for (const Metric& m : r.metrics) {
+    EXPECT_TRUE(m.Pass()) << id << ": " << m.name << " = " << m.value << " " << m.unit << ", band " << m.low
+                          << " … " << m.high << " (" << m.basis << ")";
+  }
+  return r;
+}
+
+TEST(PhysicsValidation, BallRolledAt2MetresPerSecondSlidesThenRolls) {
+  const ScenarioResult r = RunAndCheck("ball_roll_2");
+  // The sliding phase is Coulomb friction: μ_k·g with the shipped μ_k = 0.35.
+  EXPECT_NEAR(r.Get("sliding_deceleration").value, 0.35 * 9.81, 0.05);
+  EXPECT_NEAR(r.Get("stopping_distance").value, 3.0, 0.35);  // physics.md: 2.8–3.5 m at 2 m/s
+}
+
+TEST(PhysicsValidation, BallRolledAt5MetresPerSecondSlidesThenRolls) {
+  const ScenarioResult r = RunAndCheck("ball_roll_5");
+  // Decelerations do not depend on the initial speed.
+  EXPECT_NEAR(r.Get("rolling_deceleration").value, 0.359, 0.02);
+}
+
+TEST(PhysicsValidation, ChipFlightAndBounces) {
+  const ScenarioResult r = RunAndCheck("chip_flight");
+  // At least three hops are measured, each losing vertical speed.
+  EXPECT_NO_THROW(r.Get("bounce3_damping_z"));
+  EXPECT_FALSE(r.plots.empty());
+}
+
+TEST(PhysicsValidation, ThousandShotsAtTheSpeedLimitNeverPassThrough) {
+  const ScenarioResult r = RunAndCheck("no_tunnelling");
+  EXPECT_EQ(r.Get("shots").value, 1000);
+  EXPECT_GT(r.Get("deepest_penetration_into_a_robot").value, 0.0);  // the ball did hit robots
+}
+
+TEST(PhysicsValidation, TheTunnellingCheckCatchesACoarseStep) {
+  // rSim's 25 ms step moves a 6.5 m/s ball 16 cm a step, about a robot's width: shots get through,
+  // and the same check that passes at the shipped step must see them.
+  Env e;
+  const ScenarioResult r = detail::NoTunnelling(e.env, 200, 0.025);
+  EXPECT_GT(r.Get("shots_through_a_robot").value, 0);
+  EXPECT_FALSE(r.Pass());
+}
+
+TEST(PhysicsValidation, OmniRobotHoldsCommandedVelocities) { RunAndCheck("omni_steady_velocity"); }
+
+TEST(PhysicsValidation, OmniRobotSpeedsUpAtItsLimit) { RunAndCheck("omni_acceleration"); }
+
+TEST(PhysicsValidation, EveryScenarioIsCoveredHere) {
+  // A scenario added to the list without a test here would go unasserted.
+  const std::vector<std::string> tested = {"ball_roll_2", "ball_roll_5", "chip_flight", "no_tunnelling",
+                                           "omni_steady_velocity", "omni_acceleration"};
+  std::vector<std::string> all;
+  for (const Scenario& s : AllScenarios()) all.push_back(s.id);
+  EXPECT_EQ(all, tested);
+  EXPECT_THROW(FindScenario("warp_drive"), std::out_of_range);
+}
+
+}  // namespace
+}  // namespace ubersim::validation
