@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <optional>
 #include <type_traits>
 
 #include "ubersim/error.hpp"
@@ -112,7 +113,9 @@ World::World(const WorldModel& model, PluginRegistry& registry, Log& log, bool s
       log_(log),
       start_transports_(start_transports),
       clock_(model.physics.step),
-      ode_random_seed_(static_cast<unsigned long>(model.seed)) {
+      ode_random_seed_(static_cast<unsigned long>(model.seed)),
+      perception_(model.perception, model.seed),
+      radio_(model.radio, model.seed) {
   if (!model_.field || !model_.ball) throw std::runtime_error("world has no field or ball model");
   field_geometry_ = model_.field->geometry;
   Build();
@@ -185,6 +188,8 @@ void World::Reset() {
   clock_.Reset();
   sim_time_ns_ = 0;
   ode_random_seed_ = static_cast<unsigned long>(model_.seed);
+  perception_.Reset();
+  radio_.Reset();
   Build();
   log_.Info("world reset to " + model_.file);
 }
@@ -212,6 +217,8 @@ void World::ApplyEvents(bool stepping) {
         },
         e);
   }
+  // Commands whose radio latency has passed reach their robots now.
+  for (const CommandEvent& c : radio_.Deliver(sim_time_ns_)) Deliver(c);
   if (clock_control_.reset_requested) {
     clock_control_.reset_requested = false;
     Reset();
@@ -297,8 +304,13 @@ void World::Apply(const CommandEvent& e) {
     log_.Warning("command for robot " + Describe(e.robot) + " with non-finite values ignored");
     return;
   }
+  if (!radio_.Send(e, sim_time_ns_)) ++event_counters_.lost;
+}
+
+void World::Deliver(const CommandEvent& e) {
+  Robot* r = FindRobot(e.robot);
   std::string why;
-  if (r->Command(e, why)) {
+  if (r && r->Command(e, why)) {
     ++event_counters_.applied;
   } else {
     ++event_counters_.rejected;
@@ -377,11 +389,25 @@ void World::Step() {
   for (auto& r : robots_) r->PostStep(after);
   timings_.plugins_ns += ElapsedNs(t0);
 
+  // One snapshot serves the cameras and the transports, and is taken only when one needs it.
+  std::optional<WorldSnapshot> snapshot;
   t0 = SteadyClock::now();
+  if (perception_.CaptureDue(sim_time_ns_)) {
+    snapshot = Snapshot();
+    perception_.Capture(*snapshot);
+  }
+  const std::vector<VisionFrame> frames = perception_.Release(sim_time_ns_);
+  timings_.perception_ns += ElapsedNs(t0);
+
+  t0 = SteadyClock::now();
+  for (const VisionFrame& f : frames) {
+    if (vision_observer_) vision_observer_(f);
+    for (auto& t : transports_) t->Guarded("OnVisionFrame", [&](Transport& tr) { tr.OnVisionFrame(f); });
+  }
   if (!transports_.empty()) {
-    const WorldSnapshot snapshot = Snapshot();
+    if (!snapshot) snapshot = Snapshot();
     for (auto& t : transports_) {
-      t->Guarded("Publish", [&](Transport& tr) { tr.Publish(snapshot); });
+      t->Guarded("Publish", [&](Transport& tr) { tr.Publish(*snapshot); });
     }
   }
   timings_.transports_ns += ElapsedNs(t0);

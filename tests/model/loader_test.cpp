@@ -192,8 +192,9 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   EXPECT_EQ(w.seed, 1u);
   EXPECT_TRUE(w.plugin_paths.empty());
   EXPECT_TRUE(w.transports.empty());
-  EXPECT_TRUE(w.perception.IsObject());
-  EXPECT_EQ(w.perception.Size(), 0u);
+  EXPECT_EQ(w.perception.preset, "ideal");  // no perception block: the ideal preset, one camera
+  EXPECT_EQ(w.perception.cameras.size(), 1u);
+  EXPECT_EQ(w.radio.preset, "ideal");
 
   ASSERT_EQ(w.material_pairs.size(), 9u);
   const auto& bc = w.material_pairs[0];
@@ -269,7 +270,8 @@ TEST_F(Loader, WorldRobotsShareTheirModelAndResolveRelativePaths) {
       "  - {team: yellow, id: 0, model: ../robots/r.yaml, x: 1.0, y: 0.0, present: false}\n"
       "seed: 42\nplugin_paths: [../plugins, /abs/plugins]\n"
       "transports:\n  - {plugin: ssl-vision, port: 10006}\n"
-      "perception: {cameras: 4}\n");
+      "perception: {preset: realistic, camera_count: 4, latency: 0.02, noise: {ball_position: 0.003}}\n"
+      "radio: {preset: '2003', loss: 0.1}\n");
   Write("fields/f.yaml", kField);
   const auto w = loader_.LoadWorld(world);
   EXPECT_EQ(w.field->file, (dir() / "fields/f.yaml").string());
@@ -296,8 +298,34 @@ TEST_F(Loader, WorldRobotsShareTheirModelAndResolveRelativePaths) {
   EXPECT_EQ(w.transports[0].params.GetInt("port", 0), 10006);
   EXPECT_FALSE(w.transports[0].params.Has("plugin"));
   EXPECT_EQ(w.transports[0].params["port"].Path(), "transports[0].port");
-  EXPECT_EQ(w.perception.GetInt("cameras", 0), 4);
-  EXPECT_EQ(w.perception["cameras"].Path(), "perception.cameras");
+  // The preset's defaults, with the keys given on top.
+  EXPECT_EQ(w.perception.preset, "realistic");
+  EXPECT_DOUBLE_EQ(w.perception.frame_rate, 75.0);
+  EXPECT_DOUBLE_EQ(w.perception.latency, 0.02);
+  EXPECT_DOUBLE_EQ(w.perception.ball_position_sigma, 0.003);
+  EXPECT_DOUBLE_EQ(w.perception.robot_position_sigma, 0.0013);
+  ASSERT_EQ(w.perception.cameras.size(), 4u);  // 2 × 2 over the carpet, 6 m up
+  const double half_length = 0.5 * w.field->geometry.carpet_length;
+  EXPECT_DOUBLE_EQ(w.perception.cameras[0].position.x(), -0.5 * half_length);
+  EXPECT_DOUBLE_EQ(w.perception.cameras[0].x_min, -half_length);
+  EXPECT_DOUBLE_EQ(w.perception.cameras[3].x_max, half_length);
+  EXPECT_DOUBLE_EQ(w.perception.cameras[3].position.z(), 6.0);
+  EXPECT_EQ(w.radio.preset, "2003");
+  EXPECT_DOUBLE_EQ(w.radio.latency, 0.02);
+  EXPECT_DOUBLE_EQ(w.radio.loss, 0.1);
+}
+
+TEST_F(Loader, CameraDefinitionsThatCannotWorkAreReportedWhereTheyStand) {
+  const auto area = WorldWith("perception:\n  cameras:\n    - {position: [0, 0, 4], area: [1.0, -3, 1.0, 3]}\n");
+  Expect(ErrorOf([&] { loader_.LoadWorld(area); }), area, 7, 29, "perception.cameras[0].area",
+         "expected [x_min, y_min, x_max, y_max] with x_min < x_max and y_min < y_max");
+  const auto twice = WorldWith("perception:\n  cameras:\n    - {id: 3, position: [-2, 0, 4], area: [-4, -3, 0, 3]}\n"
+                               "    - {id: 3, position: [2, 0, 4], area: [0, -3, 4, 3]}\n");
+  Expect(ErrorOf([&] { loader_.LoadWorld(twice); }), twice, 8, 8, "perception.cameras[1].id",
+         "camera id 3 is already used at line 7");
+  const auto preset = WorldWith("perception: {preset: perfect}\n");
+  Expect(ErrorOf([&] { loader_.LoadWorld(preset); }), preset, 5, 14, "perception.preset",
+         "value \"perfect\" is not allowed (allowed: ideal, 2003, realistic)");
 }
 
 // --- one test per kind of error, each at its exact place ---------------------------------------

@@ -24,6 +24,66 @@ using model_detail::Describe;
 using model_detail::ErrorAt;
 using model_detail::FormatNumber;
 
+// The `perception:` block: a preset's defaults, then every key given.
+PerceptionModel LoadPerception(const ParamView& world, const FieldGeometry& field) {
+  PerceptionModel m;
+  const ParamView p = world.Has("perception") ? world["perception"] : ParamView::FromJson("{}");
+  PerceptionPreset(p.GetString("preset", "ideal"), m);  // the schema allows only known names
+  m.frame_rate = p.GetDouble("frame_rate", m.frame_rate);
+  m.latency = p.GetDouble("latency", m.latency);
+  if (p.Has("noise")) {
+    const ParamView n = p["noise"];
+    m.ball_position_sigma = n.GetDouble("ball_position", m.ball_position_sigma);
+    m.robot_position_sigma = n.GetDouble("robot_position", m.robot_position_sigma);
+    m.robot_orientation_sigma = n.GetDouble("robot_orientation", m.robot_orientation_sigma);
+  }
+  if (p.Has("drop")) {
+    m.ball_drop = p["drop"].GetDouble("ball", m.ball_drop);
+    m.robot_drop = p["drop"].GetDouble("robot", m.robot_drop);
+  }
+  m.camera_overlap = p.GetDouble("camera_overlap", m.camera_overlap);
+  if (!p.Has("cameras")) {
+    m.cameras = CameraGrid(static_cast<int>(p.GetInt("camera_count", 1)), field.carpet_length,
+                           field.carpet_width, p.GetDouble("camera_height", 6.0));
+    return m;
+  }
+  const ParamView list = p["cameras"];
+  std::map<int, int> ids;  // id -> line
+  for (std::size_t i = 0; i < list.Size(); ++i) {
+    const ParamView c = list.At(i);
+    CameraModel cam;
+    cam.id = static_cast<int>(c.GetInt("id", static_cast<std::int64_t>(i)));
+    const ParamView pos = c["position"], area = c["area"];
+    cam.position = Vec3(pos.At(0).AsDouble(), pos.At(1).AsDouble(), pos.At(2).AsDouble());
+    cam.x_min = area.At(0).AsDouble();
+    cam.y_min = area.At(1).AsDouble();
+    cam.x_max = area.At(2).AsDouble();
+    cam.y_max = area.At(3).AsDouble();
+    if (cam.x_min >= cam.x_max || cam.y_min >= cam.y_max) {
+      throw ErrorAt(area, "expected [x_min, y_min, x_max, y_max] with x_min < x_max and y_min < y_max");
+    }
+    if (cam.position.z() <= 0) throw ErrorAt(pos.At(2), "a camera hangs above the carpet: z must be > 0 m");
+    const ParamView id_node = c.Has("id") ? c["id"] : c;
+    if (const auto it = ids.find(cam.id); it != ids.end()) {
+      throw ErrorAt(id_node, "camera id " + std::to_string(cam.id) + " is already used at line " +
+                                 std::to_string(it->second));
+    }
+    ids[cam.id] = id_node.Node().line;
+    m.cameras.push_back(cam);
+  }
+  return m;
+}
+
+// The `radio:` block: a preset's defaults, then every key given.
+RadioModel LoadRadio(const ParamView& world) {
+  RadioModel m;
+  const ParamView r = world.Has("radio") ? world["radio"] : ParamView::FromJson("{}");
+  RadioPreset(r.GetString("preset", "ideal"), m);
+  m.latency = r.GetDouble("latency", m.latency);
+  m.loss = r.GetDouble("loss", m.loss);
+  return m;
+}
+
 constexpr const char* kKinds[] = {"world", "field", "ball", "robot"};
 
 std::string Metres(double v) { return FormatNumber(v) + " m"; }
@@ -427,8 +487,8 @@ struct ModelLoader::Impl {
       }
     }
 
-    if (v.Has("perception")) w.perception = v["perception"];
-    if (v.Has("radio")) w.radio = v["radio"];
+    w.perception = LoadPerception(v, w.field->geometry);
+    w.radio = LoadRadio(v);
     return w;
   }
 };

@@ -16,6 +16,7 @@
 #include "ubersim/scene.hpp"
 #include "ubersim/world_state.hpp"
 #include "ubersim/kernel/model_error.hpp"
+#include "ubersim/kernel/perception.hpp"
 
 // Typed, validated contents of the model files (models/*/*.yaml). SI units throughout.
 namespace ubersim::kernel {
@@ -117,8 +118,8 @@ struct WorldModel {
   std::vector<std::filesystem::path> plugin_paths;  ///< extra plugin folders, resolved against the file
   std::vector<TransportModel> transports;    ///< transports to start
   std::vector<MaterialPair> material_pairs;  ///< contact table
-  ParamView perception;                      ///< raw `perception:` block (cameras, noise, latency)
-  ParamView radio;                           ///< raw `radio:` block (command latency, loss)
+  PerceptionModel perception;                ///< cameras, frame rate, latency, noise, drop-outs
+  RadioModel radio;                          ///< command latency and loss
 };
 
 /// Gives the JSON Schema of a plugin's parameter block, or throws std::runtime_error saying why

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "ubersim/kernel/event_queue.hpp"
 #include "ubersim/kernel/model.hpp"
 #include "ubersim/kernel/ode_handles.hpp"
+#include "ubersim/kernel/perception.hpp"
 #include "ubersim/kernel/plugin_registry.hpp"
 #include "ubersim/kernel/scene_graph.hpp"
 
@@ -30,12 +32,14 @@ struct StepTimings {
   std::int64_t collision_ns = 0;   ///< broadphase + narrow phase + contact joints
   std::int64_t physics_ns = 0;     ///< dWorldQuickStep
   std::int64_t transports_ns = 0;  ///< Poll + Publish
+  std::int64_t perception_ns = 0;  ///< camera frames: sampling, noise, latency queue
 };
 
 /// Counters of events the world refused (with a log line each).
 struct EventCounters {
   std::int64_t applied = 0;   ///< events applied
   std::int64_t rejected = 0;  ///< unknown robot, non-finite values, …
+  std::int64_t lost = 0;      ///< robot commands the simulated radio lost
 };
 
 /// One simulated world: ODE world, scene graph, collision manager, field, ball, robots with
@@ -88,12 +92,18 @@ class World {
   const EventCounters& event_counters() const { return event_counters_; }
   /// "plugin: endpoint" of every running transport.
   std::vector<std::string> TransportEndpoints() const;
+  /// Also hands every camera frame that leaves the perception pipeline to `observer` (tests,
+  /// in-process users), on the simulation thread.
+  void SetVisionObserver(std::function<void(const VisionFrame&)> observer) { vision_observer_ = std::move(observer); }
+  /// The vision system being simulated.
+  const PerceptionModel& perception() const { return perception_.model(); }
 
  private:
   void Build();
   void ApplyEvents(bool stepping);
   void Apply(const PositionEvent& e);
   void Apply(const CommandEvent& e);
+  void Deliver(const CommandEvent& e);
   void Apply(const ClockEvent& e);
   ObjectState Query(const Target& t) const;
   Robot* FindRobot(const RobotId& id) const;
@@ -122,6 +132,9 @@ class World {
   std::unique_ptr<RobotServices> robot_services_holder_;
   StepTimings timings_;
   EventCounters event_counters_;
+  PerceptionPipeline perception_;
+  RadioLink radio_;
+  std::function<void(const VisionFrame&)> vision_observer_;
 };
 
 }  // namespace ubersim::kernel
