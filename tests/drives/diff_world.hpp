@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "ubersim/kernel/logging.hpp"
+#include "ubersim/kernel/model.hpp"
+#include "ubersim/kernel/world.hpp"
+
+// The paper's differential robot alone in the 2003 world (its materials, physics and ball), on
+// the Div B field so that long runs fit, driven by commands at 100 Hz.
+namespace ubersim::kernel {
+
+inline constexpr const char* kDiffRobot = UBERSIM_SOURCE_DIR "/models/robots/cmdragons-2003-diff.yaml";
+
+struct DiffWorld {
+  std::ostringstream text;
+  StreamLog log{text, LogLevel::kWarning};
+  PluginRegistry registry{{UBERSIM_PLUGIN_BUILD_DIR}};
+  std::unique_ptr<World> world;
+
+  explicit DiffWorld(double x = -3.0, double y = 0.0, double yaw = 0.0) {
+    const ModelLoader loader(ModelLoader::DefaultSchemaDir(),
+                             [this](PluginKind k, const std::string& id) {
+                               return registry.Find(k, id).schema_json;
+                             });
+    WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/ssl-2003.yaml");
+    model.field = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml").field;
+    model.robots.clear();
+    model.robots.push_back(RobotPlacement{{Team::kBlue, 0}, loader.LoadRobot(kDiffRobot), x, y, yaw, true});
+    model.ball_start = Vec3(3.5, 2.5, 0);  // out of the way
+    world = std::make_unique<World>(model, registry, log, false);
+  }
+  RobotState Robot() const { return world->Snapshot().robots.at(0); }
+  // Sends the command every 10 ms (a 100 Hz radio) for `seconds`.
+  void Drive(const MoveCommand& c, double seconds) {
+    const int steps = static_cast<int>(std::lround(seconds / world->model().physics.step));
+    const int every = static_cast<int>(std::lround(0.01 / world->model().physics.step));
+    for (int i = 0; i < steps; ++i) {
+      if (i % every == 0) world->events().Post(CommandEvent{{Team::kBlue, 0}, c, {}, {}});
+      world->Step();
+    }
+  }
+  // Velocity in the robot frame: forward, left, m/s.
+  Vec3 LocalVelocity() const {
+    const RobotState r = Robot();
+    return r.pose.orientation.conjugate() * r.twist.linear;
+  }
+};
+
+}  // namespace ubersim::kernel
