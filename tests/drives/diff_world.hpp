@@ -11,7 +11,7 @@
 #include "ubersim/kernel/world.hpp"
 
 // The paper's differential robot alone in the 2003 world (its materials, physics and ball), on
-// the Div B field so that long runs fit, driven by commands at 100 Hz.
+// the Div B field so that long runs fit, driven by commands at 100 Hz over an ideal radio.
 namespace ubersim::kernel {
 
 inline constexpr const char* kDiffRobot = UBERSIM_SOURCE_DIR "/models/robots/cmdragons-2003-diff.yaml";
@@ -29,6 +29,7 @@ struct DiffWorld {
                              });
     WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/ssl-2003.yaml");
     model.field = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml").field;
+    model.radio = RadioModel{};  // ideal: commands take effect at once, none lost
     model.robots.clear();
     model.robots.push_back(RobotPlacement{{Team::kBlue, 0}, loader.LoadRobot(kDiffRobot), x, y, yaw, true});
     model.ball_start = Vec3(3.5, 2.5, 0);  // out of the way
