@@ -71,10 +71,22 @@ TEST(PhysicsValidation, OmniRobotHoldsCommandedVelocities) { RunAndCheck("omni_s
 
 TEST(PhysicsValidation, OmniRobotSpeedsUpAtItsLimit) { RunAndCheck("omni_acceleration"); }
 
+TEST(PhysicsValidation, PaperDifferentialRobotAcceleratesAtTwoMetresPerSecondSquared) {
+  const ScenarioResult r = RunAndCheck("paper_acceleration");
+  ASSERT_EQ(r.plots.size(), 1u);
+  EXPECT_EQ(r.plots[0].series.size(), 2u);  // the robot and the commanded profile
+}
+
+TEST(PhysicsValidation, PaperFigureEightAtPointEightMetresPerSecond) {
+  const ScenarioResult r = RunAndCheck("paper_figure_eight");
+  EXPECT_TRUE(r.plots.at(0).equal_axes);  // a path on the field keeps its shape
+}
+
 TEST(PhysicsValidation, EveryScenarioIsCoveredHere) {
   // A scenario added to the list without a test here would go unasserted.
   const std::vector<std::string> tested = {"ball_roll_2", "ball_roll_5", "chip_flight", "no_tunnelling",
-                                           "omni_steady_velocity", "omni_acceleration"};
+                                           "omni_steady_velocity", "omni_acceleration", "paper_acceleration",
+                                           "paper_figure_eight"};
   std::vector<std::string> all;
   for (const Scenario& s : AllScenarios()) all.push_back(s.id);
   EXPECT_EQ(all, tested);
