@@ -16,6 +16,7 @@ PACKAGES=(
   libyaml-cpp-dev rapidjson-dev
   libprotobuf-dev protobuf-compiler
   libgtest-dev libgmock-dev libbenchmark-dev
+  python3-protobuf
 )
 
 install_missing() {

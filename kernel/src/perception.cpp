@@ -36,6 +36,15 @@ void PerceptionPipeline::Reset() {
   rng_.seed(seed_ ^ kVisionStream);
 }
 
+void PerceptionPipeline::Configure(const PerceptionModel& model) {
+  const double rate = model_.frame_rate;
+  const std::vector<CameraModel> cameras = model_.cameras;
+  model_ = model;
+  model_.frame_rate = rate;
+  model_.cameras = cameras;
+  latency_ns_ = Ns(model_.latency);
+}
+
 bool PerceptionPipeline::CaptureDue(std::int64_t now_ns) const {
   return std::any_of(next_capture_ns_.begin(), next_capture_ns_.end(),
                      [now_ns](std::int64_t t) { return t <= now_ns; });
@@ -112,6 +121,11 @@ RadioLink::RadioLink(RadioModel model, std::uint64_t seed)
 void RadioLink::Reset() {
   queue_.clear();
   rng_.seed(seed_ ^ kRadioStream);
+}
+
+void RadioLink::Configure(const RadioModel& model) {
+  model_ = model;
+  latency_ns_ = Ns(model_.latency);
 }
 
 bool RadioLink::Send(CommandEvent command, std::int64_t now_ns) {

@@ -39,7 +39,14 @@ RunStatus RunWorld(World& world, const RunOptions& options, const std::atomic<bo
     if (control.paused && control.pending_steps == 0) {
       world.ProcessEvents();
       pacer.Reanchor();
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      world.events().WaitForEvent(std::chrono::milliseconds(20));
+      continue;
+    }
+    const bool single_step = control.paused && control.pending_steps > 0;
+    if (single_step) {
+      // Steps asked for one by one (a viewer's step button, a synchronous client) run at once.
+      world.Step();
+      --control.pending_steps;
       continue;
     }
     const auto wait =
@@ -52,9 +59,7 @@ RunStatus RunWorld(World& world, const RunOptions& options, const std::atomic<bo
         continue;
       }
     }
-    const bool single_step = control.paused && control.pending_steps > 0;
     world.Step();
-    if (single_step) --control.pending_steps;
   }
   report(true);
   return status;

@@ -44,14 +44,13 @@ class TransportHost final : public TransportContext {
  public:
   TransportHost(const TransportModel& model, World& world, Log& log, EventSink& events,
                 const FieldGeometry& field, const std::string& world_name)
-      : plugin_(model.plugin),
+      : world_(world),
+        plugin_(model.plugin),
         params_(model.params),
         log_(log, "transport " + model.plugin),
         events_(events),
         field_(field),
-        world_name_(world_name) {
-    (void)world;
-  }
+        world_name_(world_name) {}
   ~TransportHost() override { Stop(); }
 
   const ParamView& Params() const override { return params_; }
@@ -59,6 +58,11 @@ class TransportHost final : public TransportContext {
   EventSink& Events() override { return events_; }
   const FieldGeometry& Field() const override { return field_; }
   const std::string& WorldName() const override { return world_name_; }
+  std::vector<CameraInfo> Cameras() const override {
+    std::vector<CameraInfo> out;
+    for (const CameraModel& c : world_.perception().cameras) out.push_back(CameraInfo{c.id, c.position});
+    return out;
+  }
 
   void Start(std::shared_ptr<Transport> t) {
     transport_ = std::move(t);
@@ -96,6 +100,7 @@ class TransportHost final : public TransportContext {
   }
 
  private:
+  const World& world_;
   std::string plugin_;
   ParamView params_;
   PrefixedLog log_;
@@ -316,6 +321,40 @@ void World::Deliver(const CommandEvent& e) {
     ++event_counters_.rejected;
     log_.Warning("command for robot " + Describe(e.robot) + " partly refused: " + why);
   }
+}
+
+void World::Apply(const RealismEvent& e) {
+  const std::optional<double> values[] = {e.vision_latency, e.ball_position_noise, e.robot_position_noise,
+                                          e.robot_orientation_noise, e.ball_drop, e.robot_drop,
+                                          e.camera_overlap, e.radio_latency, e.radio_loss};
+  for (const auto& v : values) {
+    if (v && (!std::isfinite(*v) || *v < 0)) {
+      ++event_counters_.rejected;
+      log_.Warning("realism settings must be finite and >= 0; ignored");
+      return;
+    }
+  }
+  for (const auto& p : {e.ball_drop, e.robot_drop, e.radio_loss}) {
+    if (p && *p > 1) {
+      ++event_counters_.rejected;
+      log_.Warning("a probability in the realism settings is above 1; ignored");
+      return;
+    }
+  }
+  PerceptionModel vision = perception_.model();
+  if (e.vision_latency) vision.latency = *e.vision_latency;
+  if (e.ball_position_noise) vision.ball_position_sigma = *e.ball_position_noise;
+  if (e.robot_position_noise) vision.robot_position_sigma = *e.robot_position_noise;
+  if (e.robot_orientation_noise) vision.robot_orientation_sigma = *e.robot_orientation_noise;
+  if (e.ball_drop) vision.ball_drop = *e.ball_drop;
+  if (e.robot_drop) vision.robot_drop = *e.robot_drop;
+  if (e.camera_overlap) vision.camera_overlap = *e.camera_overlap;
+  perception_.Configure(vision);
+  RadioModel radio = radio_.model();
+  if (e.radio_latency) radio.latency = *e.radio_latency;
+  if (e.radio_loss) radio.loss = *e.radio_loss;
+  radio_.Configure(radio);
+  ++event_counters_.applied;
 }
 
 void World::Apply(const ClockEvent& e) {

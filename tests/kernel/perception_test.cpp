@@ -188,5 +188,39 @@ TEST(Perception, AWorldHandsItsFramesToTheObserver) {
   EXPECT_NEAR(frames.back().balls[0].x, 1.0, 1e-3);
 }
 
+TEST(Perception, ARealismEventChangesLatencyNoiseAndRadioWhileRunning) {
+  WorldModel model = testing::BallWorld(Vec3(1, 1, 0));
+  model.perception = OneCamera(100.0, 0.02);
+  std::ostringstream text;
+  StreamLog log(text, LogLevel::kWarning);
+  PluginRegistry registry({});
+  World w(model, registry, log, false);
+  std::vector<VisionFrame> frames;
+  w.SetVisionObserver([&](const VisionFrame& f) { frames.push_back(f); });
+  RealismEvent bad;
+  bad.ball_drop = 1.5;
+  w.events().Post(bad);
+  RealismEvent negative;
+  negative.vision_latency = -0.01;
+  w.events().Post(negative);
+  w.ProcessEvents();
+  EXPECT_EQ(w.event_counters().rejected, 2);
+  EXPECT_DOUBLE_EQ(w.perception().latency, 0.02);  // unchanged
+
+  RealismEvent e;
+  e.vision_latency = 0.005;
+  e.ball_position_noise = 0.01;
+  e.radio_loss = 1.0;
+  w.events().Post(e);
+  for (int i = 0; i < 200; ++i) w.Step();
+  ASSERT_FALSE(frames.empty());
+  EXPECT_EQ(frames.back().t_sent_ns - frames.back().t_capture_ns, 5'000'000);
+  EXPECT_GT(std::abs(frames.back().balls.at(0).x - 1.0), 1e-6);  // noisy now
+  w.events().Post(CommandEvent{{Team::kBlue, 0}, {}, {}, 1.0});
+  w.Step();
+  EXPECT_EQ(w.event_counters().lost, 0);  // unknown robot: refused before the radio
+  EXPECT_EQ(w.event_counters().rejected, 3);
+}
+
 }  // namespace
 }  // namespace ubersim::kernel

@@ -94,8 +94,23 @@ struct ClockEvent {
   int steps = 1;                   ///< kStep: how many physics steps
 };
 
+/// Realism event: changes the simulated vision and radio while the world runs (the simulation
+/// protocol's realism settings). Unset fields stay as they are; values must be finite and >= 0,
+/// probabilities <= 1, or the event is refused.
+struct RealismEvent {
+  std::optional<double> vision_latency;           ///< capture to send, s
+  std::optional<double> ball_position_noise;      ///< σ on the ball's x, y, m
+  std::optional<double> robot_position_noise;     ///< σ on robots' x, y, m
+  std::optional<double> robot_orientation_noise;  ///< σ on robots' heading, rad
+  std::optional<double> ball_drop;                ///< probability a camera frame misses the ball
+  std::optional<double> robot_drop;               ///< probability a camera frame misses a robot
+  std::optional<double> camera_overlap;           ///< how far a camera sees past its part, m
+  std::optional<double> radio_latency;            ///< command arrival to effect, s
+  std::optional<double> radio_loss;               ///< probability a command is lost
+};
+
 /// Any event a transport or tool can post to the kernel.
-using Event = std::variant<PositionEvent, CommandEvent, QueryEvent, ClockEvent>;
+using Event = std::variant<PositionEvent, CommandEvent, QueryEvent, ClockEvent, RealismEvent>;
 
 /// Where events go. Post is thread-safe; the kernel applies events at the start of the next step,
 /// on the simulation thread, in the order they were posted.

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "ubersim/events.hpp"
 #include "ubersim/export.hpp"
@@ -26,6 +27,8 @@ class UBERSIM_SDK_API TransportContext {
   virtual const FieldGeometry& Field() const = 0;
   /// The world's name.
   virtual const std::string& WorldName() const = 0;
+  /// The simulated cameras (ids and positions), for geometry packets.
+  virtual std::vector<CameraInfo> Cameras() const = 0;
 };
 
 /// Connects the simulation to the outside (network protocols, viewers). Poll, Publish and

@@ -64,6 +64,12 @@ struct WorldSnapshot {
   const FieldGeometry* field = nullptr;  ///< valid during the call
 };
 
+/// One of the simulated overhead cameras.
+struct CameraInfo {
+  int id = 0;                    ///< camera_id in its frames
+  Vec3 position = Vec3::Zero();  ///< where it hangs, field frame, m
+};
+
 /// One detected robot in a camera frame (after noise).
 struct DetectedRobot {
   RobotId id;           ///< team and id

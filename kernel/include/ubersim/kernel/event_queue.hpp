@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
 #include <mutex>
 #include <vector>
 
@@ -13,8 +15,17 @@ class EventQueue final : public EventSink {
  public:
   /// Queues an event (any thread).
   void Post(Event event) override {
-    std::lock_guard lock(mutex_);
-    pending_.push_back(std::move(event));
+    {
+      std::lock_guard lock(mutex_);
+      pending_.push_back(std::move(event));
+    }
+    posted_.notify_all();
+  }
+  /// Waits until an event is queued or `timeout` passes (a paused world idles here, so a
+  /// client's step request is served at once instead of after a polling interval).
+  void WaitForEvent(std::chrono::milliseconds timeout) {
+    std::unique_lock lock(mutex_);
+    posted_.wait_for(lock, timeout, [this] { return !pending_.empty(); });
   }
   /// Takes every queued event, oldest first (simulation thread).
   std::vector<Event> Drain() {
@@ -26,6 +37,7 @@ class EventQueue final : public EventSink {
 
  private:
   std::mutex mutex_;
+  std::condition_variable posted_;
   std::vector<Event> pending_;
 };
 

@@ -64,6 +64,8 @@ class PerceptionPipeline {
   std::vector<VisionFrame> Release(std::int64_t now_ns);
   /// Forgets queued frames and restarts the schedule (world reset).
   void Reset();
+  /// Changes noise, drop-outs, overlap and latency while running; frame rate and cameras stay.
+  void Configure(const PerceptionModel& model);
   /// The configuration.
   const PerceptionModel& model() const { return model_; }
 
@@ -91,6 +93,8 @@ class RadioLink {
   std::vector<CommandEvent> Deliver(std::int64_t now_ns);
   /// Forgets queued commands (world reset).
   void Reset();
+  /// Changes latency and loss while running.
+  void Configure(const RadioModel& model);
   /// The configuration.
   const RadioModel& model() const { return model_; }
 

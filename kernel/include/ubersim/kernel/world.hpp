@@ -64,7 +64,7 @@ class World {
   void Reset();
 
   /// Where to post events (thread-safe).
-  EventSink& events() { return events_; }
+  EventQueue& events() { return events_; }
   /// Pause, speed, single-step and reset requests from clock events.
   ClockControl& clock_control() { return clock_control_; }
   /// Simulated time and step count.
@@ -105,6 +105,7 @@ class World {
   void Apply(const CommandEvent& e);
   void Deliver(const CommandEvent& e);
   void Apply(const ClockEvent& e);
+  void Apply(const RealismEvent& e);
   ObjectState Query(const Target& t) const;
   Robot* FindRobot(const RobotId& id) const;
 
