@@ -16,7 +16,9 @@ kernel::ModelLoader Loader(const Environment& env) {
 }  // namespace
 
 kernel::WorldModel LoadWorld(const Environment& env, const std::string& world) {
-  return Loader(env).LoadWorld(env.models_dir / world);
+  kernel::WorldModel w = Loader(env).LoadWorld(env.models_dir / world);
+  w.radio = kernel::RadioModel{};  // the physics is measured here, not the radio: no delay, no loss
+  return w;
 }
 
 std::shared_ptr<const kernel::RobotModel> LoadRobot(const Environment& env, const std::string& robot) {

@@ -30,6 +30,7 @@ struct OmniWorld {
     model.robots.clear();
     model.robots.push_back(RobotPlacement{{Team::kBlue, 0}, loader.LoadRobot(robot_file), -2.0, 0.0, 0.0, true});
     model.ball_start = Vec3(3.5, 2.5, 0);  // out of the way
+    model.radio = RadioModel{};  // the drive is tested, not the radio: no delay, no loss
     world = std::make_unique<World>(model, registry, log, false);
   }
   RobotState Robot() const { return world->Snapshot().robots.at(0); }

@@ -192,9 +192,11 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   EXPECT_EQ(w.seed, 1u);
   EXPECT_TRUE(w.plugin_paths.empty());
   EXPECT_TRUE(w.transports.empty());
-  EXPECT_EQ(w.perception.preset, "ideal");  // no perception block: the ideal preset, one camera
-  EXPECT_EQ(w.perception.cameras.size(), 1u);
-  EXPECT_EQ(w.radio.preset, "ideal");
+  EXPECT_EQ(w.perception.preset, "realistic");  // today's league: one camera over Div B, 6 m up
+  ASSERT_EQ(w.perception.cameras.size(), 1u);
+  EXPECT_EQ(w.perception.cameras[0].position, ubersim::Vec3(0, 0, 6));
+  EXPECT_DOUBLE_EQ(w.perception.frame_rate, 75);
+  EXPECT_EQ(w.radio.preset, "realistic");
 
   ASSERT_EQ(w.material_pairs.size(), 9u);
   const auto& bc = w.material_pairs[0];
@@ -234,6 +236,18 @@ TEST_F(Loader, Ssl2003FieldHasAngledCorners) {
   EXPECT_DOUBLE_EQ(f->geometry.carpet_width, 2.3);
   EXPECT_DOUBLE_EQ(f->wall.corner_cut, 0.1);
   EXPECT_DOUBLE_EQ(f->geometry.goal_width, 0.5);
+}
+
+TEST_F(Loader, Ssl2003WorldHasThePapersVisionSystem) {
+  const auto w = ModelLoader(kSchemas, kAnyPlugin).LoadWorld(kModels / "worlds/ssl-2003.yaml");
+  EXPECT_EQ(w.perception.preset, "2003");
+  EXPECT_DOUBLE_EQ(w.perception.frame_rate, 30);  // the paper: 30 Hz, about 100 ms
+  EXPECT_DOUBLE_EQ(w.perception.latency, 0.1);
+  ASSERT_EQ(w.perception.cameras.size(), 4u);      // 2 × 2 over the 2.8 × 2.3 m carpet
+  EXPECT_DOUBLE_EQ(w.perception.cameras[0].position.x(), -0.7);
+  EXPECT_DOUBLE_EQ(w.perception.cameras[0].position.y(), 0.575);
+  EXPECT_DOUBLE_EQ(w.perception.cameras[0].position.z(), 4.0);
+  EXPECT_EQ(w.radio.preset, "2003");
 }
 
 TEST_F(Loader, RobotComponentsCarryTheirOwnParameters) {
