@@ -80,11 +80,7 @@ ScenarioResult OmniAcceleration(const Environment& env) {
     v.push_back(LocalVelocity(bench.Robot(kRobot)).x());
     ideal.push_back(std::min(kTarget, kLimit * t.back()));
   }
-  std::vector<double> tf, vf;
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    if (v[i] > 0.2 * kTarget && v[i] < 0.8 * kTarget) { tf.push_back(t[i]); vf.push_back(v[i]); }
-  }
-  r.metrics.push_back(Band("acceleration_vs_limit", FitLine(tf, vf).slope / kLimit, "ratio", 0.95, 1.05,
+  r.metrics.push_back(Band("acceleration_vs_limit", SpeedUpSlope(t, v, kTarget) / kLimit, "ratio", 0.95, 1.05,
                            "issue: within 5 %"));
   r.metrics.push_back(Band("final_speed_vs_command", v.back() / kTarget, "ratio", 0.97, 1.03,
                            "issue: within 3 %"));

@@ -64,6 +64,18 @@ Line FitLine(const std::vector<double>& x, const std::vector<double>& y) {
   return {slope, (sy - slope * sx) / nn};
 }
 
+double SpeedUpSlope(const std::vector<double>& t, const std::vector<double>& v, double target, std::size_t count) {
+  std::vector<double> tf, vf;
+  const std::size_t n = count ? std::min(count, t.size()) : t.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (v[i] > 0.2 * target && v[i] < 0.8 * target) {
+      tf.push_back(t[i]);
+      vf.push_back(v[i]);
+    }
+  }
+  return FitLine(tf, vf).slope;
+}
+
 Metric Band(std::string name, double value, std::string unit, double low, double high, std::string basis) {
   return Metric{std::move(name), value, std::move(unit), low, high, std::move(basis)};
 }

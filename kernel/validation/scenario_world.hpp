@@ -44,6 +44,10 @@ class Bench {
 struct Line { double slope = 0, intercept = 0; };
 Line FitLine(const std::vector<double>& x, const std::vector<double>& y);
 
+/// Slope of speed over time while the speed is between 20 % and 80 % of `target` (the straight
+/// part of a speed-up), m/s², over the first `count` samples (all when 0).
+double SpeedUpSlope(const std::vector<double>& t, const std::vector<double>& v, double target, std::size_t count = 0);
+
 /// A metric of value with an inclusive band.
 Metric Band(std::string name, double value, std::string unit, double low, double high, std::string basis);
 
