@@ -51,6 +51,28 @@ void SpaceNearCallback(void* data, dGeomID o1, dGeomID o2) {
   (*static_cast<SpaceCallbackData*>(data)->f)(*a, *b);
 }
 
+// Slip speed above which the ball's carpet friction acts against the slip only, m/s (below it the
+// contact sticks, and the pyramid holds it without chatter).
+constexpr double kSlipThreshold = 0.01;
+
+Vec3 PointVelocity(const GeomImpl& g, const Vec3& p) {
+  if (!g.body()) return Vec3::Zero();
+  dVector3 v;
+  dBodyGetPointVel(g.body()->id(), p.x(), p.y(), p.z(), v);
+  return Vec3(v[0], v[1], v[2]);
+}
+
+// Tangential velocity of `a` relative to `b` where the ball touches the carpet (zero for other
+// pairs: walls, goals and robots keep ODE's pyramid, whose behaviour their tests pin down).
+Vec3 BallSlip(const GeomImpl& a, const GeomImpl& b, const Vec3& p, const Vec3& normal) {
+  const auto on_plane = [](const GeomImpl& ball, const GeomImpl& other) {
+    return ball.is_ball() && other.GetShape().kind == Shape::Kind::kPlane;
+  };
+  if (!on_plane(a, b) && !on_plane(b, a)) return Vec3::Zero();
+  const Vec3 v = PointVelocity(a, p) - PointVelocity(b, p);
+  return v - normal * normal.dot(v);
+}
+
 }  // namespace
 
 Broadphase ParseBroadphase(const std::string& name) {
@@ -283,6 +305,17 @@ void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
         c.fdir1[2] = dir.z();
         c.surface.mu2 = Mu2(surface);
       }
+    } else if (const Vec3 slip = BallSlip(a, b, position, normal); slip.norm() > kSlipThreshold) {
+      // ODE's friction is a pyramid: each of two directions holds up to mu·N on its own, so a
+      // ball skidding one way still sticks fully across it (a spinning ball held by a dribbler
+      // could never be carried sideways). Coulomb's cone acts against the slip alone: point the
+      // first direction along the slip, with no friction across it.
+      mode |= dContactMu2 | dContactFDir1;
+      const Vec3 dir = slip.normalized();
+      c.fdir1[0] = dir.x();
+      c.fdir1[1] = dir.y();
+      c.fdir1[2] = dir.z();
+      c.surface.mu2 = 0.0;
     } else if (surface.mu2 >= 0 && surface.mu2 != surface.mu) {
       mode |= dContactMu2;
       c.surface.mu2 = surface.mu2;
