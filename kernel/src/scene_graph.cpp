@@ -111,6 +111,46 @@ void BodyImpl::ApplyImpulse(const Vec3& impulse) {
 // ---------------------------------------------------------------------------------------------
 // GeomImpl
 
+// A convex polyhedron for ODE: its points, one plane per face (outward normal, offset), and the
+// faces. Checks what ODE would silently get wrong: bad indices, degenerate or non-convex faces.
+dGeomID GeomImpl::CreateConvex(const Shape& s) {
+  const auto fail = [this](const std::string& why) {
+    return PluginError("geometry '" + name_ + "': convex shape " + why);
+  };
+  if (s.vertices.size() < 4) throw fail("needs at least 4 vertices");
+  for (const Vec3& v : s.vertices) mesh_vertices_.insert(mesh_vertices_.end(), {v.x(), v.y(), v.z()});
+  std::size_t at = 0;
+  while (at < s.indices.size()) {
+    const unsigned count = s.indices[at];
+    if (count < 3 || at + 1 + count > s.indices.size()) {
+      throw fail("has a face that is not 'count, then count vertex indices' (at index " + std::to_string(at) + ")");
+    }
+    std::vector<Vec3> face;
+    for (unsigned k = 1; k <= count; ++k) {
+      const unsigned i = s.indices[at + k];
+      if (i >= s.vertices.size()) throw fail("face index " + std::to_string(i) + " is out of range");
+      face.push_back(s.vertices[i]);
+    }
+    const Vec3 normal = (face[1] - face[0]).cross(face[2] - face[0]);
+    if (normal.norm() < 1e-12) throw fail("has a degenerate face (at index " + std::to_string(at) + ")");
+    const Vec3 n = normal.normalized();
+    const double offset = n.dot(face[0]);
+    for (const Vec3& v : s.vertices) {
+      if (n.dot(v) - offset > 1e-9) {
+        throw fail("is not convex, or a face is not counter-clockwise seen from outside (at index " +
+                   std::to_string(at) + ")");
+      }
+    }
+    convex_planes_.insert(convex_planes_.end(), {n.x(), n.y(), n.z(), offset});
+    convex_polygons_.insert(convex_polygons_.end(), s.indices.begin() + static_cast<long>(at),
+                            s.indices.begin() + static_cast<long>(at + 1 + count));
+    at += 1 + count;
+  }
+  if (convex_planes_.size() < 4 * 4) throw fail("needs at least 4 faces");
+  return dCreateConvex(nullptr, convex_planes_.data(), static_cast<unsigned>(convex_planes_.size() / 4),
+                       mesh_vertices_.data(), static_cast<unsigned>(s.vertices.size()), convex_polygons_.data());
+}
+
 GeomImpl::GeomImpl(NodeImpl& owner, const GeomSpec& spec, BodyImpl* body)
     : owner_(owner),
       name_(spec.name),
@@ -174,9 +214,8 @@ GeomImpl::GeomImpl(NodeImpl& owner, const GeomSpec& spec, BodyImpl* body)
       break;
     }
     case Shape::Kind::kConvex:
-      throw PluginError("geometry '" + name_ +
-                        "': convex hulls are not supported by this kernel version; use a "
-                        "triangle mesh or primitives");
+      g = CreateConvex(s);
+      break;
   }
   geom_.reset(g);
   dGeomSetData(g, this);

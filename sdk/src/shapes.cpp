@@ -8,6 +8,25 @@
 namespace ubersim {
 inline namespace v1 {
 
+Shape Shape::Prism(const std::vector<Vec3>& outline, double length) {
+  if (outline.size() < 3) throw PluginError("Shape::Prism: an outline needs at least 3 corners");
+  if (!(length > 0.0)) throw PluginError("Shape::Prism: length must be positive");
+  Shape s;
+  s.kind = Kind::kConvex;
+  const unsigned n = static_cast<unsigned>(outline.size());
+  for (const Vec3& p : outline) s.vertices.emplace_back(p.x(), p.y(), -0.5 * length);  // 0 … n-1
+  for (const Vec3& p : outline) s.vertices.emplace_back(p.x(), p.y(), 0.5 * length);   // n … 2n-1
+  s.indices.push_back(n);  // top, counter-clockwise from above
+  for (unsigned i = 0; i < n; ++i) s.indices.push_back(n + i);
+  s.indices.push_back(n);  // bottom, counter-clockwise from below
+  for (unsigned i = n; i-- > 0;) s.indices.push_back(i);
+  for (unsigned i = 0; i < n; ++i) {  // sides, counter-clockwise from outside
+    const unsigned j = (i + 1) % n;
+    s.indices.insert(s.indices.end(), {4u, i, j, n + j, n + i});
+  }
+  return s;
+}
+
 double Shape::BoundingRadius() const {
   switch (kind) {
     case Kind::kSphere: return radius;

@@ -26,8 +26,10 @@ struct Shape {
   Vec3 size = Vec3::Zero();        ///< box edge lengths, m
   Vec3 plane_normal = Vec3::UnitZ();  ///< plane normal (world), for kPlane
   double plane_offset = 0.0;          ///< plane: normal·p = offset, m
-  std::vector<Vec3> vertices;         ///< kConvex (hull points) / kTriangleMesh vertices, m
-  std::vector<unsigned> indices;      ///< kTriangleMesh: 3 vertex indices per triangle
+  std::vector<Vec3> vertices;         ///< kConvex / kTriangleMesh vertices, m
+  /// kTriangleMesh: 3 vertex indices per triangle. kConvex: the faces, each as its vertex count
+  /// followed by its vertex indices, counter-clockwise seen from outside.
+  std::vector<unsigned> indices;
 
   /// A sphere of radius r.
   static Shape Sphere(double r) { Shape s; s.kind = Kind::kSphere; s.radius = r; return s; }
@@ -48,6 +50,9 @@ struct Shape {
     Shape s; s.kind = Kind::kPlane; s.plane_normal = normal.normalized(); s.plane_offset = offset;
     return s;
   }
+  /// A convex prism: `outline` (x, y of each corner, counter-clockwise seen from +z, convex)
+  /// extruded from z = -length/2 to +length/2.
+  UBERSIM_SDK_API static Shape Prism(const std::vector<Vec3>& outline, double length);
   /// Radius of the smallest sphere about the shape's origin that holds it, m (infinite for planes).
   UBERSIM_SDK_API double BoundingRadius() const;
 };

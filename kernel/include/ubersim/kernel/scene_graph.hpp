@@ -81,6 +81,7 @@ class GeomImpl final : public Geom {
   bool is_ball() const { return is_ball_; }  ///< this is the ball
 
  private:
+  dGeomID CreateConvex(const Shape& s);
   NodeImpl& owner_;
   std::string name_;
   Shape shape_;
@@ -92,8 +93,10 @@ class GeomImpl final : public Geom {
   double bounding_radius_;
   BoundingSphere cached_bounds_;
   std::vector<ContactHandler> observers_;
-  std::vector<dReal> mesh_vertices_;
-  std::vector<dTriIndex> mesh_indices_;
+  std::vector<dReal> mesh_vertices_;     // trimesh vertices, or a convex's points (ODE keeps
+  std::vector<dTriIndex> mesh_indices_;  // pointers to these, it does not copy them)
+  std::vector<dReal> convex_planes_;
+  std::vector<unsigned> convex_polygons_;
   OdeTriMeshData mesh_data_;
   OdeGeom geom_;
 };

@@ -1,0 +1,96 @@
+// SPDX-License-Identifier: Apache-2.0
+// Convex polyhedra in the scene graph: a prism rests on the carpet at its true height, stops the
+// ball, and touches a cylinder; shapes ODE would get wrong are refused with the reason.
+#include <cmath>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "../common/test_world.hpp"
+#include "ubersim/error.hpp"
+#include "ubersim/kernel/logging.hpp"
+#include "ubersim/kernel/world.hpp"
+
+namespace ubersim::kernel {
+namespace {
+
+// A regular hexagon of circumradius r, counter-clockwise.
+std::vector<Vec3> Hexagon(double r) {
+  std::vector<Vec3> out;
+  for (int i = 0; i < 6; ++i) out.emplace_back(r * std::cos(i * M_PI / 3), r * std::sin(i * M_PI / 3), 0);
+  return out;
+}
+
+struct Scene {
+  std::ostringstream text;
+  StreamLog log{text, LogLevel::kWarning};
+  PluginRegistry registry{{}};
+  World world{testing::BallWorld(Vec3(3, 2, 0)), registry, log, false};
+
+  Body& AddPrism(const std::string& name, const Vec3& at, double length = 0.1) {
+    SceneNode& node = world.scene().Root().AddChild(name);
+    BodySpec b;
+    b.name = name;
+    b.mass = MassSpec::Solid(Shape::Box(0.2, 0.2, length), 1.0);
+    b.pose.position = at;
+    Body& body = node.AddBody(b);
+    GeomSpec g;
+    g.name = "shell";
+    g.shape = Shape::Prism(Hexagon(0.1), length);
+    node.AddGeom(g, &body);
+    return body;
+  }
+};
+
+TEST(Convex, APrismRestsOnTheCarpetAtItsHeight) {
+  Scene s;
+  Body& prism = s.AddPrism("prism", Vec3(0, 0, 0.3), 0.1);
+  for (int i = 0; i < 2000; ++i) s.world.Step();
+  EXPECT_NEAR(prism.GetPose().position.z(), 0.05, 0.001);  // half its length, less the contact layer
+  EXPECT_LT(prism.GetTwist().linear.norm(), 1e-3);
+}
+
+TEST(Convex, APrismStopsTheBallAndIsPushedByIt) {
+  Scene s;
+  Body& prism = s.AddPrism("prism", Vec3(0, 0, 0.05), 0.1);
+  s.world.events().Post(PositionEvent{Target::Ball(), Vec3(-0.5, 0, 0.0215), std::nullopt, Vec3(4, 0, 0),
+                                      Vec3::Zero(), std::nullopt});
+  double closest = 1e9;
+  for (int i = 0; i < 400; ++i) {
+    s.world.Step();
+    closest = std::min(closest, std::abs(s.world.ball().GetPose().position.x() - prism.GetPose().position.x()));
+  }
+  // The hexagon's flat side faces -x at its inradius 0.0866 m: the ball's centre stays outside.
+  EXPECT_GT(closest, 0.0866 + 0.0215 - 0.006);
+  EXPECT_LT(s.world.ball().GetTwist().linear.x(), 0.0);  // bounced back
+  EXPECT_GT(prism.GetPose().position.x(), 0.001);        // and pushed the prism
+}
+
+TEST(Convex, ShapesODEWouldGetWrongAreRefused) {
+  Scene s;
+  SceneNode& node = s.world.scene().Root().AddChild("bad");
+  GeomSpec g;
+  g.name = "dent";
+  std::vector<Vec3> dented = Hexagon(0.1);
+  dented[1] *= 0.3;  // a reflex corner
+  g.shape = Shape::Prism(dented, 0.1);
+  try {
+    node.AddGeom(g, nullptr);
+    FAIL() << "a non-convex prism was accepted";
+  } catch (const PluginError& e) {
+    EXPECT_NE(std::string(e.what()).find("geometry 'dent': convex shape is not convex"), std::string::npos) << e.what();
+  }
+  g.name = "clockwise";
+  std::vector<Vec3> clockwise = Hexagon(0.1);
+  std::reverse(clockwise.begin(), clockwise.end());
+  g.shape = Shape::Prism(clockwise, 0.1);
+  EXPECT_THROW(node.AddGeom(g, nullptr), PluginError);
+  g.name = "indices";
+  g.shape = Shape::Prism(Hexagon(0.1), 0.1);
+  g.shape.indices[3] = 99;
+  EXPECT_THROW(node.AddGeom(g, nullptr), PluginError);
+  EXPECT_THROW(Shape::Prism({Vec3::Zero(), Vec3::UnitX()}, 0.1), PluginError);
+}
+
+}  // namespace
+}  // namespace ubersim::kernel
