@@ -1,0 +1,93 @@
+// SPDX-License-Identifier: Apache-2.0
+// The SSL simulation protocol as plain functions: wire messages in, kernel events and errors out,
+// and world state back into wire messages. No sockets, no threads: the unit tests drive these
+// directly. Units change only here (degrees → rad, rpm → rad/s; the protocol itself is in metres
+// and seconds; detections are in millimetres).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <ubersim/events.hpp>
+#include <ubersim/world_state.hpp>
+
+#include "ssl_simulation_control.pb.h"
+#include "ssl_simulation_robot_control.pb.h"
+#include "ssl_simulation_robot_feedback.pb.h"
+#include "ssl_vision_detection.pb.h"
+
+namespace google::protobuf {
+class MessageLite;
+}
+
+namespace ubersim::ssl_simulation {
+
+/// One SimulatorError to send back.
+struct WireError {
+  std::string code;     ///< stable UBERSIM_* code (error_codes.hpp)
+  std::string message;  ///< for people
+};
+
+/// Settings of the mapping that come from the world file.
+struct MappingOptions {
+  /// Drive wheel index for the protocol's front_right, back_right, back_left, front_left.
+  /// The default fits drives whose wheels are listed counter-clockwise from the front left
+  /// (the shipped four-wheel robot: 60°, 135°, 225°, 300°). Empty: wheel_velocity is refused.
+  std::vector<int> wheel_order = {3, 2, 1, 0};
+  double ball_radius = 0.0215;  ///< m, for `roll`
+};
+
+/// Tells whether a robot exists in the world.
+using RobotExists = std::function<bool(const RobotId&)>;
+
+/// What one message turns into. When a message is refused (`refused`), `events` is empty.
+struct Mapped {
+  std::vector<Event> events;      ///< to post, in order
+  std::vector<WireError> errors;  ///< to send back
+  bool refused = false;           ///< a validation error: nothing of the message applies
+};
+
+/// The commands of one RobotControl, with the robot ids it named.
+struct MappedRobotControl : Mapped {
+  std::vector<std::uint32_t> commanded_ids;  ///< every RobotCommand.id, in order, once each
+};
+
+/// SimulatorCommand → position, clock and realism events.
+Mapped MapSimulatorCommand(const SimulatorCommand& command, const RobotExists& exists,
+                           const MappingOptions& options);
+
+/// RobotControl for `team` (from the port or the sync configuration) → command events.
+MappedRobotControl MapRobotControl(const RobotControl& control, Team team, const RobotExists& exists,
+                                   const MappingOptions& options);
+
+/// The state one robot's feedback needs; nullopt when the robot is unknown.
+using ContactLookup = std::function<std::optional<bool>(const RobotId&)>;
+
+/// Feedback for each commanded robot that exists (dribbler_ball_contact), plus the errors.
+RobotControlResponse BuildRobotControlResponse(const std::vector<std::uint32_t>& ids, Team team,
+                                               const ContactLookup& contact,
+                                               const std::vector<WireError>& errors);
+
+/// Appends errors to a repeated SimulatorError field.
+void AppendErrors(const std::vector<WireError>& errors,
+                  google::protobuf::RepeatedPtrField<SimulatorError>* out);
+
+/// One camera frame as an SSL_DetectionFrame: mm, and seconds of simulated time.
+SSL_DetectionFrame ToDetectionFrame(const VisionFrame& frame);
+
+/// Parses `size` bytes into `message`; an error when larger than `max_size`, unparseable or
+/// missing a required field (UBERSIM_OVERSIZED, UBERSIM_UNREADABLE, UBERSIM_MISSING_FIELD).
+std::optional<WireError> ParseMessage(const void* data, std::size_t size, std::size_t max_size,
+                                      google::protobuf::MessageLite& message);
+
+/// rpm → rad/s.
+inline double RpmToRadPerSecond(double rpm) { return rpm * 2.0 * 3.14159265358979323846 / 60.0; }
+/// degrees → rad.
+inline double DegToRad(double deg) { return deg * 3.14159265358979323846 / 180.0; }
+
+}  // namespace ubersim::ssl_simulation

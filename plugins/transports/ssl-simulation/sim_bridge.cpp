@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim_bridge.hpp"
+
+#include <algorithm>
+
+namespace ubersim::ssl_simulation {
+
+void SimBridge::OnVisionFrame(const VisionFrame& frame) {
+  std::lock_guard lock(mutex_);
+  if (armed_ && !complete_) frames_.push_back(frame);
+}
+
+void SimBridge::OnPublish(const WorldSnapshot& snapshot) {
+  std::lock_guard lock(mutex_);
+  robots_.resize(snapshot.robots.size());
+  for (std::size_t i = 0; i < snapshot.robots.size(); ++i) {
+    robots_[i] = RobotEntry{snapshot.robots[i].id, snapshot.robots[i].dribbler_ball_contact};
+  }
+  has_state_ = true;
+  ball_radius_ = snapshot.ball.radius;
+  // The kernel's step is fixed and integral in ns, so time / steps is exact.
+  if (snapshot.step > 0) step_ns_ = snapshot.sim_time_ns / snapshot.step;
+  if (armed_ && !complete_ && --remaining_ <= 0) {
+    complete_ = true;
+    result_step_ = snapshot.step;
+    result_time_ns_ = snapshot.sim_time_ns;
+    done_.notify_all();
+  }
+}
+
+bool SimBridge::HasState() const {
+  std::lock_guard lock(mutex_);
+  return has_state_;
+}
+
+bool SimBridge::Exists(const RobotId& id) const { return Contact(id).has_value(); }
+
+std::optional<bool> SimBridge::Contact(const RobotId& id) const {
+  std::lock_guard lock(mutex_);
+  for (const RobotEntry& r : robots_) {
+    if (r.id == id) return r.contact;
+  }
+  return std::nullopt;
+}
+
+double SimBridge::BallRadius() const {
+  std::lock_guard lock(mutex_);
+  return ball_radius_;
+}
+
+std::int64_t SimBridge::StepNs() const {
+  std::lock_guard lock(mutex_);
+  return step_ns_;
+}
+
+void SimBridge::Arm(std::int64_t steps) {
+  std::lock_guard lock(mutex_);
+  armed_ = true;
+  complete_ = false;
+  remaining_ = std::max<std::int64_t>(1, steps);
+  frames_.clear();
+}
+
+std::optional<StepResult> SimBridge::Wait(std::chrono::steady_clock::duration timeout) {
+  std::unique_lock lock(mutex_);
+  const bool ok = done_.wait_for(lock, timeout, [this] { return complete_ || cancelled_; }) && complete_;
+  armed_ = false;
+  if (!ok) {
+    frames_.clear();
+    return std::nullopt;
+  }
+  StepResult r;
+  r.frames.swap(frames_);
+  r.step = result_step_;
+  r.sim_time_ns = result_time_ns_;
+  return r;
+}
+
+void SimBridge::Cancel() {
+  std::lock_guard lock(mutex_);
+  cancelled_ = true;
+  done_.notify_all();
+}
+
+}  // namespace ubersim::ssl_simulation

@@ -1,0 +1,269 @@
+// SPDX-License-Identifier: Apache-2.0
+// ssl_simulation: the league's simulation protocol. SimulatorCommand on the control port,
+// RobotControl on one port per team, each datagram answered to its sender; optionally a TCP
+// server for synchronous stepping. Network threads only parse, map (mapping.hpp) and post events;
+// they learn the world from SimBridge, which the simulation thread fills in Publish.
+#include <chrono>
+#include <cmath>
+#include <future>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <boost/asio/io_context.hpp>
+#include <ubersim/ubersim.hpp>
+
+#include "error_codes.hpp"
+#include "mapping.hpp"
+#include "rate_limited_log.hpp"
+#include "sim_bridge.hpp"
+#include "sync_server.hpp"
+#include "udp_port.hpp"
+#include "ubersim_plugin_schema.hpp"
+
+// Inside the project's namespace: the wire messages' global Team and RobotId must not win lookup.
+namespace ubersim::ssl_simulation {
+namespace {
+
+using namespace std::chrono_literals;
+
+struct SyncSettings {
+  std::uint16_t port = 0;
+  Team team = Team::kBlue;
+  double max_step = 1.0;        // s
+  std::size_t max_clients = 4;
+  double timeout = 10.0;        // s of wall time
+};
+
+class SslSimulationTransport final : public Transport {
+ public:
+  ~SslSimulationTransport() override { Stop(); }
+
+  void Start(TransportContext& context) override {
+    context_ = &context;
+    const ParamView& p = context.Params();
+    address_ = p.GetString("address", "127.0.0.1");
+    max_message_ = static_cast<std::size_t>(p.GetInt("max_message_size", 16384));
+    if (p.Has("wheel_velocity_order")) {
+      options_.wheel_order.clear();
+      const ParamView order = p["wheel_velocity_order"];
+      for (std::size_t i = 0; i < order.Size(); ++i) options_.wheel_order.push_back(static_cast<int>(order.At(i).AsInt()));
+      if (!options_.wheel_order.empty() && options_.wheel_order.size() != 4) {
+        throw order.Error("needs 4 wheel indices (front_right, back_right, back_left, front_left) or none");
+      }
+    }
+    refused_ = std::make_unique<RateLimitedLog>(context.Logger(), 1s);
+
+    try {
+      OpenUdp(p.GetInt("control_port", 10300), [this](std::string_view d) { return OnControl(d); }, "control");
+      OpenUdp(p.GetInt("blue_port", 10301), [this](std::string_view d) { return OnRobotControl(Team::kBlue, d); },
+              "blue");
+      OpenUdp(p.GetInt("yellow_port", 10302),
+              [this](std::string_view d) { return OnRobotControl(Team::kYellow, d); }, "yellow");
+      if (p.Has("sync")) {
+        const ParamView s = p["sync"];
+        sync_.port = static_cast<std::uint16_t>(s["port"].AsInt());
+        sync_.team = s.GetString("team", "blue") == "yellow" ? Team::kYellow : Team::kBlue;
+        sync_.max_step = s.GetDouble("max_step", sync_.max_step);
+        sync_.max_clients = static_cast<std::size_t>(s.GetInt("max_clients", 4));
+        sync_.timeout = s.GetDouble("timeout", sync_.timeout);
+        sync_server_ = std::make_unique<SyncServer>(io_, address_, sync_.port, max_message_, sync_.max_clients,
+                                                    context.Logger(),
+                                                    [this](const SimulationSyncRequest& r) { return OnSync(r); });
+        // No real-time clock may drive a synchronous world: it steps only when a client asks.
+        ClockEvent pause;
+        pause.action = ClockEvent::Action::kPause;
+        context.Events().Post(pause);
+      }
+    } catch (const std::runtime_error& e) {
+      throw PluginError(e.what());
+    }
+    for (auto& port : udp_) port->Start();
+    if (sync_server_) sync_server_->Start();
+    io_thread_ = std::thread([this] { io_.run(); });
+  }
+
+  void Publish(const WorldSnapshot& snapshot) override { bridge_.OnPublish(snapshot); }
+  void OnVisionFrame(const VisionFrame& frame) override { bridge_.OnVisionFrame(frame); }
+
+  std::string Endpoint() const override {
+    std::string out = "udp";
+    for (std::size_t i = 0; i < udp_.size(); ++i) {
+      out += (i ? ", " : " ") + address_ + ":" + std::to_string(udp_[i]->Port()) + " (" + udp_names_[i] + ")";
+    }
+    if (sync_server_) {
+      out += "; tcp " + address_ + ":" + std::to_string(sync_.port) + " (sync, " + ToString(sync_.team) + ")";
+    }
+    return out;
+  }
+
+  void Stop() override {
+    // The worker first (it may wait for steps that will not come), then the sockets' thread.
+    bridge_.Cancel();
+    if (sync_server_) sync_server_->StopWorker();
+    io_.stop();
+    if (io_thread_.joinable()) io_thread_.join();
+    sync_server_.reset();
+    udp_.clear();
+  }
+
+ private:
+  void OpenUdp(std::int64_t port, UdpPort::Handler handler, const char* name) {
+    if (port == 0) return;  // switched off in the world file
+    udp_.push_back(std::make_unique<UdpPort>(io_, address_, static_cast<std::uint16_t>(port), std::move(handler)));
+    udp_names_.emplace_back(name);
+  }
+
+  // Whether a robot exists. Before the first step there is no published state, so ask the kernel
+  // (queries are answered even while paused); bounded, so a stalled world cannot hang us.
+  bool RobotExists(const RobotId& id) {
+    if (bridge_.HasState()) return bridge_.Exists(id);
+    auto answer = std::make_shared<std::promise<bool>>();
+    std::future<bool> found = answer->get_future();
+    QueryEvent q;
+    q.target = Target::Robot(id);
+    q.reply = [answer](const ObjectState& s) { answer->set_value(s.found); };
+    context_->Events().Post(std::move(q));
+    return found.wait_for(500ms) == std::future_status::ready && found.get();
+  }
+
+  std::optional<bool> Contact(const RobotId& id) {
+    if (bridge_.HasState()) return bridge_.Contact(id);
+    return RobotExists(id) ? std::optional<bool>(false) : std::nullopt;
+  }
+
+  MappingOptions Options() const {
+    MappingOptions o = options_;
+    o.ball_radius = bridge_.BallRadius();
+    return o;
+  }
+
+  void Post(std::vector<Event>& events) {
+    for (Event& e : events) context_->Events().Post(std::move(e));
+  }
+
+  void CountRefused(const char* port, const std::vector<WireError>& errors) {
+    if (errors.empty()) return;
+    refused_->Count(std::string(port) + ": " + errors.front().code + ": " + errors.front().message);
+  }
+
+  std::string OnControl(std::string_view datagram) {
+    SimulatorResponse response;
+    SimulatorCommand command;
+    if (auto e = ParseMessage(datagram.data(), datagram.size(), max_message_, command)) {
+      CountRefused("control", {*e});
+      AppendErrors({*e}, response.mutable_errors());
+    } else {
+      Mapped m = MapSimulatorCommand(command, [this](const RobotId& id) { return RobotExists(id); }, Options());
+      if (m.refused) CountRefused("control", m.errors);
+      Post(m.events);
+      AppendErrors(m.errors, response.mutable_errors());
+    }
+    // Every datagram gets an answer, even an empty one, so a client knows it arrived.
+    return response.SerializeAsString();
+  }
+
+  std::string OnRobotControl(Team team, std::string_view datagram) {
+    RobotControl control;
+    const char* port = team == Team::kBlue ? "blue" : "yellow";
+    if (auto e = ParseMessage(datagram.data(), datagram.size(), max_message_, control)) {
+      CountRefused(port, {*e});
+      RobotControlResponse r;
+      AppendErrors({*e}, r.mutable_errors());
+      return r.SerializeAsString();
+    }
+    MappedRobotControl m = MapRobotControl(control, team, [this](const RobotId& id) { return RobotExists(id); },
+                                           Options());
+    if (m.refused) CountRefused(port, m.errors);
+    Post(m.events);
+    return BuildRobotControlResponse(m.commanded_ids, team, [this](const RobotId& id) { return Contact(id); },
+                                     m.errors)
+        .SerializeAsString();
+  }
+
+  // Runs on the sync worker: apply the request, step, wait for the simulation thread.
+  SimulationSyncResponse OnSync(const SimulationSyncRequest& request) {
+    SimulationSyncResponse response;
+    std::vector<WireError> errors;
+    std::vector<std::uint32_t> ids;
+    const double sim_step = request.has_sim_step() ? request.sim_step() : 0.0;
+    if (!std::isfinite(sim_step) || sim_step < 0 || sim_step > sync_.max_step) {
+      errors.push_back({codes::kSyncStep, "sim_step must be in [0, " + std::to_string(sync_.max_step) + "] s"});
+      CountRefused("sync", errors);
+      AppendErrors(errors, response.mutable_robot_control_response()->mutable_errors());
+      return response;
+    }
+    auto exists = [this](const RobotId& id) { return RobotExists(id); };
+    if (request.has_simulator_command()) {
+      Mapped m = MapSimulatorCommand(request.simulator_command(), exists, Options());
+      Post(m.events);
+      errors.insert(errors.end(), m.errors.begin(), m.errors.end());
+    }
+    if (request.has_robot_control()) {
+      MappedRobotControl m = MapRobotControl(request.robot_control(), sync_.team, exists, Options());
+      Post(m.events);
+      ids = m.commanded_ids;
+      errors.insert(errors.end(), m.errors.begin(), m.errors.end());
+    }
+    if (sim_step > 0) {
+      const auto timeout = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+          std::chrono::duration<double>(std::max(sync_.timeout, 20.0 * sim_step)));
+      std::vector<VisionFrame> frames;
+      bool ok = true;
+      std::int64_t step_ns = bridge_.StepNs();
+      std::int64_t done = 0;
+      if (step_ns == 0) {
+        // Nothing published yet, so the step length is unknown: one step tells it.
+        ok = RunSteps(1, timeout, frames);
+        done = 1;
+        step_ns = bridge_.StepNs();
+      }
+      if (ok && step_ns > 0) {
+        // Whole physics steps, rounded to nearest; any positive sim_step is at least one.
+        const auto total = std::max<std::int64_t>(1, std::llround(sim_step * 1e9 / static_cast<double>(step_ns)));
+        if (total > done) ok = RunSteps(total - done, timeout, frames);
+      }
+      if (!ok) {
+        errors.push_back({codes::kSyncTimeout, "the world did not finish the steps within the timeout"});
+      }
+      for (const VisionFrame& f : frames) *response.add_detection() = ToDetectionFrame(f);
+    }
+    *response.mutable_robot_control_response() =
+        BuildRobotControlResponse(ids, sync_.team, [this](const RobotId& id) { return Contact(id); }, errors);
+    return response;
+  }
+
+  bool RunSteps(std::int64_t steps, std::chrono::steady_clock::duration timeout, std::vector<VisionFrame>& frames) {
+    // Armed before the step event is posted: the paused world publishes nothing in between.
+    bridge_.Arm(steps);
+    ClockEvent step;
+    step.action = ClockEvent::Action::kStep;
+    step.steps = static_cast<int>(steps);
+    context_->Events().Post(step);
+    std::optional<StepResult> r = bridge_.Wait(timeout);
+    if (!r) return false;
+    frames.insert(frames.end(), r->frames.begin(), r->frames.end());
+    return true;
+  }
+
+  TransportContext* context_ = nullptr;
+  std::string address_;
+  std::size_t max_message_ = 16384;
+  MappingOptions options_;
+  SyncSettings sync_;
+  SimBridge bridge_;
+  std::unique_ptr<RateLimitedLog> refused_;
+  // The io_context outlives every socket made on it (members are destroyed in reverse order).
+  boost::asio::io_context io_;
+  std::vector<std::unique_ptr<UdpPort>> udp_;
+  std::vector<std::string> udp_names_;
+  std::unique_ptr<SyncServer> sync_server_;
+  std::thread io_thread_;
+};
+
+}  // namespace
+}  // namespace ubersim::ssl_simulation
+
+UBERSIM_REGISTER_TRANSPORT(ubersim::ssl_simulation::SslSimulationTransport, "ssl_simulation", "1.0.0", ubersim_plugin::kSchema)

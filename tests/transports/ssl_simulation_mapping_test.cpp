@@ -1,0 +1,563 @@
+// SPDX-License-Identifier: Apache-2.0
+// The ssl_simulation transport's protocol mapping, framing and simulation-thread bridge, without
+// sockets: wire messages in, events and SimulatorErrors out, in the units the kernel uses.
+#include <cmath>
+#include <limits>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "delimited.hpp"
+#include "error_codes.hpp"
+#include "mapping.hpp"
+#include "sim_bridge.hpp"
+#include "ssl_simulation_custom_erforce.pb.h"
+
+// Inside the project's namespace: the wire messages' global Team and RobotId must not win lookup.
+namespace ubersim::ssl_simulation {
+namespace {
+
+// Blue and yellow robots 0..5 exist.
+bool SixEach(const RobotId& id) { return id.id >= 0 && id.id < 6; }
+
+const MappingOptions kOptions{};
+
+bool HasCode(const std::vector<WireError>& errors, const std::string& code) {
+  for (const auto& e : errors) {
+    if (e.code == code) return true;
+  }
+  return false;
+}
+
+template <typename T>
+const T& As(const Event& e) {
+  const T* p = std::get_if<T>(&e);
+  EXPECT_NE(p, nullptr);
+  static const T empty{};
+  return p ? *p : empty;
+}
+
+TEST(SslSimulationMapping, TeleportBallPlacesAndStopsIt) {
+  SimulatorCommand c;
+  TeleportBall* b = c.mutable_control()->mutable_teleport_ball();
+  b->set_x(1.5f);
+  b->set_y(-0.5f);
+  const Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
+  ASSERT_TRUE(m.errors.empty());
+  ASSERT_EQ(m.events.size(), 1u);
+  const auto& e = As<PositionEvent>(m.events[0]);
+  EXPECT_TRUE(e.target.is_ball);
+  ASSERT_TRUE(e.position);
+  EXPECT_FLOAT_EQ(e.position->x(), 1.5f);
+  EXPECT_FLOAT_EQ(e.position->y(), -0.5f);
+  EXPECT_EQ(e.position->z(), 0.0);  // the kernel rests it on the carpet
+  EXPECT_FALSE(e.velocity);         // and stops it
+}
+
+TEST(SslSimulationMapping, TeleportBallVelocitySlidesOrRolls) {
+  SimulatorCommand c;
+  TeleportBall* b = c.mutable_control()->mutable_teleport_ball();
+  b->set_x(0);
+  b->set_y(0);
+  b->set_vx(2.0f);
+  b->set_vy(1.0f);
+  Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
+  ASSERT_EQ(m.events.size(), 1u);
+  {
+    const auto& e = As<PositionEvent>(m.events[0]);
+    ASSERT_TRUE(e.velocity && e.angular_velocity);
+    EXPECT_DOUBLE_EQ(e.velocity->x(), 2.0);
+    EXPECT_DOUBLE_EQ(e.velocity->z(), 0.0);
+    EXPECT_EQ(*e.angular_velocity, Vec3::Zero());  // slides
+  }
+  b->set_roll(true);
+  MappingOptions o;
+  o.ball_radius = 0.02;
+  m = MapSimulatorCommand(c, SixEach, o);
+  ASSERT_TRUE(m.errors.empty());
+  const auto& e = As<PositionEvent>(m.events[0]);
+  // Rolling without slip: ω = (−vy, vx, 0) / r.
+  EXPECT_NEAR(e.angular_velocity->x(), -1.0 / 0.02, 1e-9);
+  EXPECT_NEAR(e.angular_velocity->y(), 2.0 / 0.02, 1e-9);
+  // The contact point stands still.
+  const Vec3 contact = *e.velocity + e.angular_velocity->cross(Vec3(0, 0, -0.02));
+  EXPECT_LT(contact.norm(), 1e-9);
+}
+
+TEST(SslSimulationMapping, TeleportBallPartialOrNonFiniteRefusesEverything) {
+  SimulatorCommand c;
+  c.mutable_control()->mutable_teleport_ball()->set_x(1.0f);
+  TeleportRobot* r = c.mutable_control()->add_teleport_robot();
+  r->mutable_id()->set_id(1);
+  r->mutable_id()->set_team(::BLUE);
+  r->set_x(0);
+  r->set_y(0);
+  Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
+  EXPECT_TRUE(m.refused);
+  EXPECT_TRUE(m.events.empty());  // not even the valid robot teleport
+  EXPECT_TRUE(HasCode(m.errors, codes::kPartialCoord));
+
+  c.mutable_control()->mutable_teleport_ball()->set_y(std::numeric_limits<float>::quiet_NaN());
+  m = MapSimulatorCommand(c, SixEach, kOptions);
+  EXPECT_TRUE(m.events.empty());
+  EXPECT_TRUE(HasCode(m.errors, codes::kNonFinite));
+  c.mutable_control()->mutable_teleport_ball()->set_y(std::numeric_limits<float>::infinity());
+  EXPECT_TRUE(HasCode(MapSimulatorCommand(c, SixEach, kOptions).errors, codes::kNonFinite));
+}
+
+TEST(SslSimulationMapping, UnsupportedBallOptionsSkipOnlyTheBall) {
+  for (int which = 0; which < 2; ++which) {
+    SimulatorCommand c;
+    TeleportBall* b = c.mutable_control()->mutable_teleport_ball();
+    b->set_x(1);
+    b->set_y(1);
+    if (which == 0) b->set_teleport_safely(true); else b->set_by_force(true);
+    TeleportRobot* r = c.mutable_control()->add_teleport_robot();
+    r->mutable_id()->set_id(2);
+    r->mutable_id()->set_team(::YELLOW);
+    r->set_orientation(1.0f);
+    const Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
+    EXPECT_FALSE(m.refused);
+    EXPECT_TRUE(HasCode(m.errors, which == 0 ? codes::kTeleportSafely : codes::kByForce));
+    ASSERT_EQ(m.events.size(), 1u);
+    EXPECT_FALSE(As<PositionEvent>(m.events[0]).target.is_ball);
+  }
+  // by_force=false alone (the protocol's "stop forcing") is a quiet no-op.
+  SimulatorCommand c;
+  c.mutable_control()->mutable_teleport_ball()->set_by_force(false);
+  const Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
+  EXPECT_TRUE(m.errors.empty());
+  EXPECT_TRUE(m.events.empty());
+}
+
+TEST(SslSimulationMapping, TeleportRobot) {
+  SimulatorCommand c;
+  TeleportRobot* r = c.mutable_control()->add_teleport_robot();
+  r->mutable_id()->set_id(3);
+  r->mutable_id()->set_team(::YELLOW);
+  r->set_x(-1.0f);
+  r->set_y(2.0f);
+  r->set_orientation(0.5f);
+  r->set_v_x(1.0f);
+  r->set_v_angular(2.0f);
+  r->set_present(true);
+  const Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
+  ASSERT_TRUE(m.errors.empty());
+  ASSERT_EQ(m.events.size(), 1u);
+  const auto& e = As<PositionEvent>(m.events[0]);
+  EXPECT_EQ(e.target.robot, (RobotId{Team::kYellow, 3}));
+  EXPECT_DOUBLE_EQ(e.position->x(), -1.0);
+  EXPECT_DOUBLE_EQ(e.position->y(), 2.0);
+  EXPECT_FLOAT_EQ(static_cast<float>(*e.yaw), 0.5f);
+  EXPECT_DOUBLE_EQ(e.velocity->x(), 1.0);
+  EXPECT_DOUBLE_EQ(e.velocity->y(), 0.0);
+  EXPECT_DOUBLE_EQ(e.angular_velocity->z(), 2.0);
+  EXPECT_TRUE(*e.present);
+
+  // Taking a robot off the field needs nothing else.
+  SimulatorCommand off;
+  TeleportRobot* o = off.mutable_control()->add_teleport_robot();
+  o->mutable_id()->set_id(0);
+  o->mutable_id()->set_team(::BLUE);
+  o->set_present(false);
+  const Mapped mo = MapSimulatorCommand(off, SixEach, kOptions);
+  ASSERT_EQ(mo.events.size(), 1u);
+  const auto& eo = As<PositionEvent>(mo.events[0]);
+  EXPECT_FALSE(*eo.present);
+  EXPECT_FALSE(eo.position || eo.yaw || eo.velocity);
+}
+
+TEST(SslSimulationMapping, TeleportRobotErrors) {
+  auto one = [](auto setup) {
+    SimulatorCommand c;
+    TeleportRobot* r = c.mutable_control()->add_teleport_robot();
+    r->mutable_id()->set_id(1);
+    r->mutable_id()->set_team(::BLUE);
+    setup(*r);
+    return MapSimulatorCommand(c, SixEach, kOptions);
+  };
+  auto refused_with = [](const Mapped& m, const char* code) {
+    EXPECT_TRUE(m.refused) << code;
+    EXPECT_TRUE(m.events.empty()) << code;
+    EXPECT_TRUE(HasCode(m.errors, code)) << code;
+  };
+  refused_with(one([](TeleportRobot& r) { r.mutable_id()->set_id(9); }), codes::kUnknownRobot);
+  refused_with(one([](TeleportRobot& r) { r.mutable_id()->set_team(::UNKNOWN); }), codes::kInvalidTeam);
+  refused_with(one([](TeleportRobot& r) { r.mutable_id()->clear_team(); }), codes::kInvalidTeam);
+  refused_with(one([](TeleportRobot& r) { r.mutable_id()->clear_id(); }), codes::kMissingField);
+  refused_with(one([](TeleportRobot& r) { r.set_x(1); }), codes::kPartialCoord);
+  refused_with(one([](TeleportRobot& r) { r.set_y(1); }), codes::kPartialCoord);
+  refused_with(one([](TeleportRobot& r) { r.set_orientation(std::nanf("")); }), codes::kNonFinite);
+  refused_with(one([](TeleportRobot& r) { r.set_v_x(INFINITY); }), codes::kNonFinite);
+  const Mapped forced = one([](TeleportRobot& r) { r.set_by_force(true); });
+  EXPECT_FALSE(forced.refused);
+  EXPECT_TRUE(forced.events.empty());
+  EXPECT_TRUE(HasCode(forced.errors, codes::kByForce));
+}
+
+TEST(SslSimulationMapping, SimulationSpeed) {
+  SimulatorCommand c;
+  c.mutable_control()->set_simulation_speed(2.0f);
+  Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
+  ASSERT_EQ(m.events.size(), 1u);
+  EXPECT_EQ(As<ClockEvent>(m.events[0]).action, ClockEvent::Action::kSetSpeed);
+  EXPECT_DOUBLE_EQ(As<ClockEvent>(m.events[0]).speed_factor, 2.0);
+  for (float bad : {0.0f, -1.0f, std::nanf("")}) {
+    c.mutable_control()->set_simulation_speed(bad);
+    m = MapSimulatorCommand(c, SixEach, kOptions);
+    EXPECT_TRUE(m.events.empty());
+    EXPECT_TRUE(HasCode(m.errors, codes::kInvalidValue));
+  }
+}
+
+SimulatorCommand WithRealism(const RealismConfigErForce& r, const std::string& url) {
+  SimulatorCommand c;
+  google::protobuf::Any* any = c.mutable_config()->mutable_realism_config()->add_custom();
+  any->set_type_url(url);
+  any->set_value(r.SerializeAsString());
+  return c;
+}
+
+TEST(SslSimulationMapping, RealismErForceWithOrWithoutPackage) {
+  RealismConfigErForce r;
+  r.set_stddev_ball_p(0.002f);
+  r.set_stddev_robot_p(0.003f);
+  r.set_stddev_robot_phi(0.01f);
+  r.set_missing_ball_detections(0.05f);
+  r.set_missing_robot_detections(0.02f);
+  r.set_camera_overlap(0.5f);
+  r.set_vision_delay(35000000);
+  r.set_robot_command_loss(0.03f);
+  r.set_command_delay(3000000);
+  for (const char* url : {"type.googleapis.com/RealismConfigErForce", "type.googleapis.com/sslsim.RealismConfigErForce"}) {
+    const Mapped m = MapSimulatorCommand(WithRealism(r, url), SixEach, kOptions);
+    EXPECT_TRUE(m.errors.empty()) << url;
+    ASSERT_EQ(m.events.size(), 1u) << url;
+    const auto& e = As<RealismEvent>(m.events[0]);
+    EXPECT_NEAR(*e.ball_position_noise, 0.002, 1e-9);
+    EXPECT_NEAR(*e.robot_position_noise, 0.003, 1e-9);
+    EXPECT_NEAR(*e.robot_orientation_noise, 0.01, 1e-9);
+    EXPECT_NEAR(*e.ball_drop, 0.05, 1e-9);
+    EXPECT_NEAR(*e.robot_drop, 0.02, 1e-9);
+    EXPECT_NEAR(*e.camera_overlap, 0.5, 1e-9);
+    EXPECT_DOUBLE_EQ(*e.vision_latency, 0.035);  // ns → s
+    EXPECT_NEAR(*e.radio_loss, 0.03, 1e-9);
+    EXPECT_DOUBLE_EQ(*e.radio_latency, 0.003);
+  }
+}
+
+TEST(SslSimulationMapping, RealismListsWhatItCannotApply) {
+  RealismConfigErForce r;
+  r.set_vision_delay(20000000);
+  r.set_stddev_ball_area(6.5f);
+  r.set_enable_invisible_ball(true);
+  r.set_simulate_dribbling(true);       // what we do anyway: not listed
+  r.set_object_position_offset(0.0f);   // likewise
+  const Mapped m = MapSimulatorCommand(WithRealism(r, "RealismConfigErForce"), SixEach, kOptions);
+  EXPECT_FALSE(m.refused);
+  ASSERT_EQ(m.events.size(), 1u);  // vision_delay still applies
+  ASSERT_EQ(m.errors.size(), 1u);
+  EXPECT_EQ(m.errors[0].code, codes::kRealismFields);
+  EXPECT_NE(m.errors[0].message.find("stddev_ball_area"), std::string::npos);
+  EXPECT_NE(m.errors[0].message.find("enable_invisible_ball"), std::string::npos);
+  EXPECT_EQ(m.errors[0].message.find("simulate_dribbling"), std::string::npos);
+  EXPECT_EQ(m.errors[0].message.find("object_position_offset"), std::string::npos);
+
+  RealismConfigErForce bad;
+  bad.set_missing_ball_detections(1.5f);
+  Mapped mb = MapSimulatorCommand(WithRealism(bad, "RealismConfigErForce"), SixEach, kOptions);
+  EXPECT_TRUE(mb.refused);
+  EXPECT_TRUE(HasCode(mb.errors, codes::kInvalidValue));
+  bad.set_missing_ball_detections(0.1f);
+  bad.set_vision_delay(-5);
+  mb = MapSimulatorCommand(WithRealism(bad, "RealismConfigErForce"), SixEach, kOptions);
+  EXPECT_TRUE(mb.refused);
+
+  SimulatorCommand garbled = WithRealism(r, "RealismConfigErForce");
+  garbled.mutable_config()->mutable_realism_config()->mutable_custom(0)->set_value("\xff\xff\xff");
+  EXPECT_TRUE(HasCode(MapSimulatorCommand(garbled, SixEach, kOptions).errors, codes::kUnreadable));
+}
+
+TEST(SslSimulationMapping, ConfigWeCannotApplyIsNeverSilent) {
+  SimulatorCommand c;
+  c.mutable_config()->mutable_geometry();
+  RobotSpecs* s = c.mutable_config()->add_robot_specs();
+  s->mutable_id()->set_id(0);
+  c.mutable_config()->set_vision_port(10020);
+  google::protobuf::Any* any = c.mutable_config()->mutable_realism_config()->add_custom();
+  any->set_type_url("type.googleapis.com/RealismConfigGrSim");
+  const Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
+  EXPECT_TRUE(HasCode(m.errors, codes::kGeometry));
+  EXPECT_TRUE(HasCode(m.errors, codes::kRobotSpecs));
+  EXPECT_TRUE(HasCode(m.errors, codes::kVisionPort));
+  EXPECT_TRUE(HasCode(m.errors, codes::kUnknownRealism));
+  EXPECT_TRUE(m.events.empty());
+}
+
+TEST(SslSimulationMapping, RobotCommandUnits) {
+  RobotControl rc;
+  RobotCommand* c = rc.add_robot_commands();
+  c->set_id(4);
+  c->mutable_move_command()->mutable_local_velocity()->set_forward(1.0f);
+  c->mutable_move_command()->mutable_local_velocity()->set_left(-0.5f);
+  c->mutable_move_command()->mutable_local_velocity()->set_angular(2.0f);
+  c->set_kick_speed(10.0f);
+  c->set_kick_angle(45.0f);
+  c->set_dribbler_speed(600.0f);
+  const MappedRobotControl m = MapRobotControl(rc, Team::kYellow, SixEach, kOptions);
+  ASSERT_TRUE(m.errors.empty());
+  ASSERT_EQ(m.events.size(), 1u);
+  const auto& e = As<CommandEvent>(m.events[0]);
+  EXPECT_EQ(e.robot, (RobotId{Team::kYellow, 4}));
+  const auto& v = std::get<LocalVelocityCommand>(*e.move);
+  EXPECT_DOUBLE_EQ(v.forward, 1.0);
+  EXPECT_DOUBLE_EQ(v.left, -0.5);
+  EXPECT_DOUBLE_EQ(v.angular, 2.0);
+  EXPECT_DOUBLE_EQ(e.kick->speed, 10.0);            // the kicker clamps, not the transport
+  EXPECT_NEAR(e.kick->angle, M_PI / 4, 1e-12);      // degrees → rad
+  EXPECT_NEAR(*e.dribbler_speed, 600.0 * 2 * M_PI / 60, 1e-9);  // rpm → rad/s
+  EXPECT_EQ(m.commanded_ids, std::vector<std::uint32_t>{4});
+}
+
+TEST(SslSimulationMapping, MoveKinds) {
+  RobotControl rc;
+  RobotCommand* g = rc.add_robot_commands();
+  g->set_id(0);
+  g->mutable_move_command()->mutable_global_velocity()->set_x(1);
+  g->mutable_move_command()->mutable_global_velocity()->set_y(2);
+  g->mutable_move_command()->mutable_global_velocity()->set_angular(3);
+  RobotCommand* w = rc.add_robot_commands();
+  w->set_id(1);
+  MoveWheelVelocity* wv = w->mutable_move_command()->mutable_wheel_velocity();
+  wv->set_front_right(1);
+  wv->set_back_right(2);
+  wv->set_back_left(3);
+  wv->set_front_left(4);
+  MappedRobotControl m = MapRobotControl(rc, Team::kBlue, SixEach, kOptions);
+  ASSERT_TRUE(m.errors.empty());
+  ASSERT_EQ(m.events.size(), 2u);
+  const auto& gv = std::get<GlobalVelocityCommand>(*As<CommandEvent>(m.events[0]).move);
+  EXPECT_DOUBLE_EQ(gv.y, 2.0);
+  // Default order: drive wheels listed counter-clockwise from the front left (60°, 135°, 225°, 300°).
+  const auto& ws = std::get<WheelSpeedCommand>(*As<CommandEvent>(m.events[1]).move);
+  EXPECT_EQ(ws.wheel_speeds, (std::vector<double>{4, 3, 2, 1}));
+
+  MappingOptions off;
+  off.wheel_order.clear();
+  m = MapRobotControl(rc, Team::kBlue, SixEach, off);
+  EXPECT_FALSE(m.refused);
+  EXPECT_TRUE(HasCode(m.errors, codes::kWheelVelocity));
+  ASSERT_EQ(m.events.size(), 1u);  // the global-velocity robot still moves
+}
+
+TEST(SslSimulationMapping, RobotCommandErrorsRefuseTheWholeDatagram) {
+  auto two = [](auto setup) {
+    RobotControl rc;
+    RobotCommand* good = rc.add_robot_commands();
+    good->set_id(0);
+    good->mutable_move_command()->mutable_local_velocity()->set_forward(1);
+    good->mutable_move_command()->mutable_local_velocity()->set_left(0);
+    good->mutable_move_command()->mutable_local_velocity()->set_angular(0);
+    RobotCommand* bad = rc.add_robot_commands();
+    bad->set_id(1);
+    setup(*bad);
+    return MapRobotControl(rc, Team::kBlue, SixEach, kOptions);
+  };
+  auto refused_with = [](const MappedRobotControl& m, const char* code) {
+    EXPECT_TRUE(m.refused) << code;
+    EXPECT_TRUE(m.events.empty()) << code;
+    EXPECT_TRUE(HasCode(m.errors, code)) << code;
+  };
+  refused_with(two([](RobotCommand& c) { c.set_id(7); }), codes::kUnknownRobot);
+  refused_with(two([](RobotCommand& c) { c.set_kick_speed(NAN); }), codes::kNonFinite);
+  refused_with(two([](RobotCommand& c) { c.set_dribbler_speed(-INFINITY); }), codes::kNonFinite);
+  refused_with(two([](RobotCommand& c) {
+                 auto* v = c.mutable_move_command()->mutable_local_velocity();
+                 v->set_forward(NAN);
+                 v->set_left(0);
+                 v->set_angular(0);
+               }),
+               codes::kNonFinite);
+  refused_with(two([](RobotCommand& c) { c.mutable_move_command(); }), codes::kMissingField);
+  refused_with(two([](RobotCommand& c) { c.set_kick_speed(-1); }), codes::kInvalidValue);
+  refused_with(two([](RobotCommand& c) {
+                 c.set_kick_speed(3);
+                 c.set_kick_angle(95);
+               }),
+               codes::kInvalidValue);
+  // The ids are still known, so the response can give feedback for the robots that exist.
+  const MappedRobotControl m = two([](RobotCommand& c) { c.set_id(7); });
+  EXPECT_EQ(m.commanded_ids, (std::vector<std::uint32_t>{0, 7}));
+}
+
+TEST(SslSimulationMapping, ResponseHasFeedbackForEachCommandedRobot) {
+  auto contact = [](const RobotId& id) -> std::optional<bool> {
+    if (!SixEach(id)) return std::nullopt;
+    return id.id == 2;
+  };
+  const RobotControlResponse r = BuildRobotControlResponse(
+      {2, 3, 9}, Team::kBlue, contact, {WireError{codes::kUnknownRobot, "no robot blue 9"}});
+  ASSERT_EQ(r.feedback_size(), 2);
+  EXPECT_EQ(r.feedback(0).id(), 2u);
+  EXPECT_TRUE(r.feedback(0).dribbler_ball_contact());
+  EXPECT_EQ(r.feedback(1).id(), 3u);
+  EXPECT_TRUE(r.feedback(1).has_dribbler_ball_contact());
+  EXPECT_FALSE(r.feedback(1).dribbler_ball_contact());
+  ASSERT_EQ(r.errors_size(), 1);
+  EXPECT_EQ(r.errors(0).code(), codes::kUnknownRobot);
+  EXPECT_TRUE(r.IsInitialized());
+}
+
+TEST(SslSimulationMapping, ParseMessageKinds) {
+  RobotControl rc;
+  rc.add_robot_commands()->set_id(1);
+  const std::string good = rc.SerializeAsString();
+  RobotControl out;
+  EXPECT_FALSE(ParseMessage(good.data(), good.size(), 1024, out));
+
+  const std::string big(2000, '\0');
+  auto e = ParseMessage(big.data(), big.size(), 1024, out);
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->code, codes::kOversized);
+
+  const std::string garbage = "\xff\xff\xff\xff\xff\xff\xff";
+  e = ParseMessage(garbage.data(), garbage.size(), 1024, out);
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->code, codes::kUnreadable);
+
+  // Truncated inside the nested RobotCommand.
+  RobotControl longer;
+  RobotCommand* c = longer.add_robot_commands();
+  c->set_id(1);
+  c->set_kick_speed(3);
+  const std::string whole = longer.SerializeAsString();
+  e = ParseMessage(whole.data(), whole.size() - 2, 1024, out);
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->code, codes::kUnreadable);
+
+  // A RobotCommand without its required id: well-formed, but incomplete.
+  RobotControl missing;
+  missing.add_robot_commands()->set_kick_speed(1);
+  const std::string partial = missing.SerializePartialAsString();
+  e = ParseMessage(partial.data(), partial.size(), 1024, out);
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->code, codes::kMissingField);
+}
+
+TEST(SslSimulationMapping, DetectionFrameInMillimetres) {
+  VisionFrame f;
+  f.camera_id = 1;
+  f.frame_number = 42;
+  f.t_capture_ns = 1'500'000'000;
+  f.t_sent_ns = 1'535'000'000;
+  f.balls.push_back(DetectedBall{0.25, -1.0, 0.0, 0.9});
+  f.robots.push_back(DetectedRobot{RobotId{Team::kBlue, 3}, 1.0, 2.0, 0.5, 1.0});
+  f.robots.push_back(DetectedRobot{RobotId{Team::kYellow, 5}, -1.0, 0.0, -3.0, 1.0});
+  const SSL_DetectionFrame d = ToDetectionFrame(f);
+  EXPECT_TRUE(d.IsInitialized());
+  EXPECT_EQ(d.camera_id(), 1u);
+  EXPECT_EQ(d.frame_number(), 42u);
+  EXPECT_DOUBLE_EQ(d.t_capture(), 1.5);
+  EXPECT_DOUBLE_EQ(d.t_sent(), 1.535);
+  ASSERT_EQ(d.balls_size(), 1);
+  EXPECT_FLOAT_EQ(d.balls(0).x(), 250.0f);
+  EXPECT_FLOAT_EQ(d.balls(0).y(), -1000.0f);
+  ASSERT_EQ(d.robots_blue_size(), 1);
+  ASSERT_EQ(d.robots_yellow_size(), 1);
+  EXPECT_EQ(d.robots_blue(0).robot_id(), 3u);
+  EXPECT_FLOAT_EQ(d.robots_blue(0).x(), 1000.0f);
+  EXPECT_FLOAT_EQ(d.robots_blue(0).orientation(), 0.5f);
+  EXPECT_EQ(d.robots_yellow(0).robot_id(), 5u);
+}
+
+TEST(SslSimulationFraming, RoundTripInPieces) {
+  const std::string a(300, 'a');  // a two-byte length prefix
+  const std::string b;            // an empty message is a valid empty request
+  const std::string c = "ccc";
+  const std::string stream = EncodeDelimited(a) + EncodeDelimited(b) + EncodeDelimited(c);
+  EXPECT_EQ(static_cast<unsigned char>(stream[0]), 0xac);  // 300 = 0b10_0101100
+  EXPECT_EQ(static_cast<unsigned char>(stream[1]), 0x02);
+  DelimitedDecoder d(1000);
+  std::vector<std::string> got;
+  std::string msg, err;
+  for (char ch : stream) {  // one byte at a time: every split point
+    d.Append(std::string_view(&ch, 1));
+    for (;;) {
+      const auto s = d.Next(msg, err);
+      ASSERT_NE(s, DelimitedDecoder::Status::kError) << err;
+      if (s == DelimitedDecoder::Status::kNeedMore) break;
+      got.push_back(msg);
+    }
+  }
+  EXPECT_EQ(got, (std::vector<std::string>{a, b, c}));
+  EXPECT_EQ(d.Buffered(), 0u);
+}
+
+TEST(SslSimulationFraming, BadPrefixesAreFinal) {
+  std::string msg, err;
+  DelimitedDecoder too_long(1000);
+  too_long.Append("\xff\xff\xff\xff\xff\x01");
+  EXPECT_EQ(too_long.Next(msg, err), DelimitedDecoder::Status::kError);
+  EXPECT_NE(err.find("prefix"), std::string::npos);
+  too_long.Append(EncodeDelimited("ok"));
+  EXPECT_EQ(too_long.Next(msg, err), DelimitedDecoder::Status::kError);  // stays broken
+
+  DelimitedDecoder too_big(1000);
+  too_big.Append(EncodeDelimited(std::string(1001, 'x')).substr(0, 3));  // the prefix is enough
+  EXPECT_EQ(too_big.Next(msg, err), DelimitedDecoder::Status::kError);
+  EXPECT_NE(err.find("larger"), std::string::npos);
+}
+
+WorldSnapshot Snap(std::int64_t step, bool contact) {
+  WorldSnapshot s;
+  s.step = step;
+  s.sim_time_ns = step * 1'000'000;
+  RobotState r;
+  r.id = RobotId{Team::kBlue, 0};
+  r.dribbler_ball_contact = contact;
+  s.robots.push_back(r);
+  return s;
+}
+
+TEST(SslSimulationBridge, KnowsRobotsAndStepLength) {
+  SimBridge b;
+  EXPECT_FALSE(b.HasState());
+  EXPECT_EQ(b.StepNs(), 0);
+  EXPECT_FALSE(b.Contact(RobotId{Team::kBlue, 0}));
+  b.OnPublish(Snap(5, true));
+  EXPECT_TRUE(b.HasState());
+  EXPECT_EQ(b.StepNs(), 1'000'000);
+  EXPECT_EQ(b.Contact(RobotId{Team::kBlue, 0}), std::optional<bool>(true));
+  EXPECT_FALSE(b.Exists(RobotId{Team::kYellow, 0}));
+}
+
+TEST(SslSimulationBridge, ArmedRunCollectsFramesUntilItsLastStep) {
+  SimBridge b;
+  VisionFrame before;
+  before.frame_number = 1;
+  b.OnVisionFrame(before);  // not armed: dropped
+  b.Arm(3);
+  std::thread sim([&] {
+    for (int i = 1; i <= 4; ++i) {
+      VisionFrame f;
+      f.frame_number = static_cast<std::uint32_t>(10 + i);
+      b.OnVisionFrame(f);
+      b.OnPublish(Snap(i, false));
+    }
+  });
+  const auto r = b.Wait(std::chrono::seconds(5));
+  sim.join();
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->frames.size(), 3u);  // the fourth step's frame came after the run
+  EXPECT_EQ(r->frames.front().frame_number, 11u);
+  EXPECT_EQ(r->frames.back().frame_number, 13u);
+  EXPECT_EQ(r->step, 3);
+  EXPECT_EQ(r->sim_time_ns, 3'000'000);
+
+  b.Arm(2);
+  b.OnPublish(Snap(5, false));
+  EXPECT_FALSE(b.Wait(std::chrono::milliseconds(20)));  // one step short: times out
+}
+
+}  // namespace
+}  // namespace ubersim::ssl_simulation
