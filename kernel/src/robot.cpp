@@ -119,8 +119,10 @@ namespace {
 
 // The chassis shell: a cylinder of `radius` and `length` (along z, centred) cut flat at
 // x = front_distance, where the ball sits against the dribbler and kicker. A closed triangle
-// mesh: this kernel's scene graph has no convex-hull geometry, and ODE collides triangle meshes
-// with every shape the field, ball and robots use (the URDF twin's shell is the same mesh).
+// mesh, not a convex prism: ODE's convex-plane test returns the first max_contacts vertices below
+// the plane, all on one side of a 33-corner outline, so a chassis resting on the carpet (no
+// ground clearance, or knocked over) tips over. Triangle meshes collide well with every shape the
+// field, ball and robots use (the URDF twin's shell is the same mesh).
 Shape FlatFrontPrism(double radius, double front_distance, double length) {
   constexpr int kArcSegments = 32;
   const double cut = std::acos(std::clamp(front_distance / radius, -1.0, 1.0));
