@@ -214,10 +214,10 @@ class UdpClient:
 
     def recv(self, timeout):
         """(bytes, sender) of the next datagram, or None after `timeout` s."""
-        self.sock.settimeout(timeout)
+        self.sock.settimeout(max(timeout, 1e-4))  # 0 would make the socket non-blocking
         try:
             return self.sock.recvfrom(65536)
-        except socket.timeout:
+        except (socket.timeout, BlockingIOError):
             return None
 
     def close(self):
@@ -245,10 +245,10 @@ class MulticastReceiver:
 
     def recv(self, timeout):
         """Bytes of the next datagram, or None after `timeout` s."""
-        self.sock.settimeout(timeout)
+        self.sock.settimeout(max(timeout, 1e-4))  # 0 would make the socket non-blocking
         try:
             return self.sock.recv(65536)
-        except socket.timeout:
+        except (socket.timeout, BlockingIOError):
             return None
 
     def recv_until(self, predicate, timeout, parse=None):
