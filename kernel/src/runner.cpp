@@ -33,6 +33,9 @@ RunStatus RunWorld(World& world, const RunOptions& options, const std::atomic<bo
     if (on_status) on_status(status);
   };
 
+  // Events posted before the loop (a transport pausing the world as it starts) apply before
+  // the first step.
+  world.ProcessEvents();
   while (!stop.load(std::memory_order_relaxed)) {
     if (duration_ns > 0 && world.clock().time_ns() >= duration_ns) break;
     if (Clock::now() - last_report >= report_every) report(false);

@@ -6,6 +6,7 @@
 
 #include "ball_scenarios.hpp"
 #include "paper_scenarios.hpp"
+#include "parts_scenarios.hpp"
 #include "robot_scenarios.hpp"
 
 namespace ubersim::validation {
@@ -19,6 +20,8 @@ const std::vector<Scenario>& AllScenarios() {
       {"no_tunnelling", "1000 shots at 6.5 m/s", [](const Environment& e) { return NoTunnelling(e, 1000); }},
       {"omni_steady_velocity", "Omni robot steady velocities", OmniSteadyVelocity},
       {"omni_acceleration", "Omni robot acceleration", OmniAcceleration},
+      {"kicker_speeds", "Kicker: clamped flat kick, chip angle", KickerSpeeds},
+      {"dribbler_hold", "Dribbler: hold while driving and turning", DribblerHold},
       {"paper_acceleration", "2003 paper: straight-line acceleration at 2 m/s²", PaperAcceleration},
       {"paper_figure_eight", "2003 paper: figure-8 at 0.8 m/s", PaperFigureEight},
   };

@@ -71,6 +71,17 @@ TEST(PhysicsValidation, OmniRobotHoldsCommandedVelocities) { RunAndCheck("omni_s
 
 TEST(PhysicsValidation, OmniRobotSpeedsUpAtItsLimit) { RunAndCheck("omni_acceleration"); }
 
+TEST(PhysicsValidation, KickerClampsFlatKicksAndChipsAtItsAngle) {
+  const ScenarioResult r = RunAndCheck("kicker_speeds");
+  EXPECT_NEAR(r.Get("flat_kick_commanded_10").value, 6.5, 0.1);
+}
+
+TEST(PhysicsValidation, DribblerHoldsTheBallDrivingAndTurningAndLosesItSpinning) {
+  const ScenarioResult r = RunAndCheck("dribbler_hold");
+  EXPECT_EQ(r.Get("drive_1m_and_turn_90_held_fraction").value, 1.0);
+  EXPECT_EQ(r.Get("fast_spin_8_rad_s_loses_the_ball").value, 1.0);
+}
+
 TEST(PhysicsValidation, PaperDifferentialRobotAcceleratesAtTwoMetresPerSecondSquared) {
   const ScenarioResult r = RunAndCheck("paper_acceleration");
   ASSERT_EQ(r.plots.size(), 1u);
@@ -85,8 +96,8 @@ TEST(PhysicsValidation, PaperFigureEightAtPointEightMetresPerSecond) {
 TEST(PhysicsValidation, EveryScenarioIsCoveredHere) {
   // A scenario added to the list without a test here would go unasserted.
   const std::vector<std::string> tested = {"ball_roll_2", "ball_roll_5", "chip_flight", "no_tunnelling",
-                                           "omni_steady_velocity", "omni_acceleration", "paper_acceleration",
-                                           "paper_figure_eight"};
+                                           "omni_steady_velocity", "omni_acceleration", "kicker_speeds",
+                                           "dribbler_hold", "paper_acceleration", "paper_figure_eight"};
   std::vector<std::string> all;
   for (const Scenario& s : AllScenarios()) all.push_back(s.id);
   EXPECT_EQ(all, tested);
