@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The SimulatorError codes this transport sends. They are part of the wire interface: stable,
-// documented in docs/interfaces-simulation.md, never renamed.
+// documented in docs/interfaces.md, never renamed.
 #pragma once
 
 namespace ubersim::ssl_simulation::codes {
