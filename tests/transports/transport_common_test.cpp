@@ -116,6 +116,27 @@ TEST(UdpServer, DropsOversizedDatagramsAndSurvivesAThrowingHandler) {
   EXPECT_EQ(server.Dropped(), 2u);
 }
 
+// A transport that must answer every request (ssl_simulation) replies to an oversized one from
+// the drop handler, which knows the kind of drop and the sender.
+TEST(UdpServer, TheDropHandlerKnowsTheKindAndCanReplyToTheSender) {
+  Inbox inbox;
+  UdpServer* server_ptr = nullptr;
+  UdpServer server(
+      {"127.0.0.1", 0, 100, "test"}, [&](std::span<const std::uint8_t>, const UdpEndpoint&) {},
+      [&](const DropReason& why, const UdpEndpoint& from) {
+        if (why.kind == DropReason::Kind::kOversized) server_ptr->Reply(from, Bytes("too long: " + why.text));
+        inbox.Add(inbox.drops, why.text);
+      });
+  server_ptr = &server;
+  server.Start();
+  Client client;
+  client.Send(std::string(101, 'x'), server.LocalEndpoint());
+  EXPECT_EQ(client.Receive(), "too long: datagram longer than 100 bytes");
+  ASSERT_TRUE(inbox.WaitFor(inbox.drops, 1));
+  EXPECT_EQ(server.Dropped(), 1u);
+  EXPECT_EQ(server.Received(), 0u);
+}
+
 TEST(UdpServer, APortInUseIsAnErrorNamingAddressAndPort) {
   UdpServer first({"127.0.0.1", 0, 100, "first"}, [](auto, const auto&) {});
   const int port = first.LocalEndpoint().port();
@@ -213,6 +234,14 @@ TEST(RejectLog, CountsEveryRejectionAndWritesAtMostOneLinePerInterval) {
   fast.Reject("a");
   fast.Reject("b");
   EXPECT_EQ(log.lines.size(), 4u);
+}
+
+TEST(RejectLog, NamesWhatItCounts) {
+  CapturingLog log;
+  RejectLog refused(log, "message refused", 10s, "refused");
+  refused.Reject("blue: UBERSIM_UNREADABLE");
+  ASSERT_EQ(log.lines.size(), 1u);
+  EXPECT_EQ(log.lines[0], "message refused: blue: UBERSIM_UNREADABLE (1 refused since the last report, 1 in total)");
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "error_codes.hpp"
 #include "ssl_simulation_custom_erforce.pb.h"
+#include "transport_common/wire_units.hpp"
 
 namespace ubersim::ssl_simulation {
 namespace {
@@ -307,9 +308,9 @@ MappedRobotControl MapRobotControl(const RobotControl& control, Team team, const
         errors.Refuse(codes::kInvalidValue, "kick of " + Name(id) + ": kick_speed must be >= 0 and kick_angle in [0, 90) degrees");
         continue;
       }
-      e.kick = KickCommand{rc.kick_speed(), DegToRad(rc.kick_angle())};
+      e.kick = KickCommand{rc.kick_speed(), transport::DegToRad(rc.kick_angle())};
     }
-    if (rc.has_dribbler_speed()) e.dribbler_speed = RpmToRadPerSecond(rc.dribbler_speed());
+    if (rc.has_dribbler_speed()) e.dribbler_speed = transport::RpmToRadPerS(rc.dribbler_speed());
     if (e.move || e.kick || e.dribbler_speed) out.events.emplace_back(std::move(e));
   }
   if (out.refused) out.events.clear();
@@ -344,14 +345,14 @@ void AppendErrors(const std::vector<WireError>& errors,
 SSL_DetectionFrame ToDetectionFrame(const VisionFrame& frame) {
   SSL_DetectionFrame d;
   d.set_frame_number(frame.frame_number);
-  d.set_t_capture(1e-9 * static_cast<double>(frame.t_capture_ns));
-  d.set_t_sent(1e-9 * static_cast<double>(frame.t_sent_ns));
+  d.set_t_capture(transport::NsToSeconds(frame.t_capture_ns));
+  d.set_t_sent(transport::NsToSeconds(frame.t_sent_ns));
   d.set_camera_id(static_cast<std::uint32_t>(frame.camera_id));
   for (const DetectedBall& b : frame.balls) {
     SSL_DetectionBall* o = d.add_balls();
     o->set_confidence(static_cast<float>(b.confidence));
-    o->set_x(static_cast<float>(b.x * 1000.0));
-    o->set_y(static_cast<float>(b.y * 1000.0));
+    o->set_x(static_cast<float>(transport::MetresToMm(b.x)));
+    o->set_y(static_cast<float>(transport::MetresToMm(b.y)));
     o->set_pixel_x(0.0f);  // no image: the simulator sees the field directly
     o->set_pixel_y(0.0f);
   }
@@ -359,8 +360,8 @@ SSL_DetectionFrame ToDetectionFrame(const VisionFrame& frame) {
     SSL_DetectionRobot* o = r.id.team == Team::kBlue ? d.add_robots_blue() : d.add_robots_yellow();
     o->set_confidence(static_cast<float>(r.confidence));
     o->set_robot_id(static_cast<std::uint32_t>(r.id.id));
-    o->set_x(static_cast<float>(r.x * 1000.0));
-    o->set_y(static_cast<float>(r.y * 1000.0));
+    o->set_x(static_cast<float>(transport::MetresToMm(r.x)));
+    o->set_y(static_cast<float>(transport::MetresToMm(r.y)));
     o->set_orientation(static_cast<float>(r.yaw));
     o->set_pixel_x(0.0f);
     o->set_pixel_y(0.0f);

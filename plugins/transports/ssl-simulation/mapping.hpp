@@ -85,9 +85,4 @@ SSL_DetectionFrame ToDetectionFrame(const VisionFrame& frame);
 std::optional<WireError> ParseMessage(const void* data, std::size_t size, std::size_t max_size,
                                       google::protobuf::MessageLite& message);
 
-/// rpm → rad/s.
-inline double RpmToRadPerSecond(double rpm) { return rpm * 2.0 * 3.14159265358979323846 / 60.0; }
-/// degrees → rad.
-inline double DegToRad(double deg) { return deg * 3.14159265358979323846 / 180.0; }
-
 }  // namespace ubersim::ssl_simulation

@@ -5,10 +5,13 @@
 // they learn the world from SimBridge, which the simulation thread fills in Publish.
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <future>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -17,10 +20,10 @@
 
 #include "error_codes.hpp"
 #include "mapping.hpp"
-#include "rate_limited_log.hpp"
 #include "sim_bridge.hpp"
 #include "sync_server.hpp"
-#include "udp_port.hpp"
+#include "transport_common/reject_log.hpp"
+#include "transport_common/udp_server.hpp"
 #include "ubersim_plugin_schema.hpp"
 
 // Inside the project's namespace: the wire messages' global Team and RobotId must not win lookup.
@@ -28,6 +31,23 @@ namespace ubersim::ssl_simulation {
 namespace {
 
 using namespace std::chrono_literals;
+using transport::DropReason;
+using transport::RejectLog;
+using transport::UdpEndpoint;
+using transport::UdpServer;
+
+// A request port: turns a datagram into its reply, or a refusal (an error found before the
+// content was read, e.g. UBERSIM_OVERSIZED) into that port's response type.
+struct UdpPort {
+  std::string name;  // "control", "blue", "yellow"
+  std::function<std::string(std::string_view datagram)> answer;
+  std::function<std::string(const WireError& error)> refuse;
+  std::unique_ptr<UdpServer> server;
+};
+
+std::span<const std::uint8_t> AsBytes(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
 
 struct SyncSettings {
   std::uint16_t port = 0;
@@ -54,14 +74,18 @@ class SslSimulationTransport final : public Transport {
         throw order.Error("needs 4 wheel indices (front_right, back_right, back_left, front_left) or none");
       }
     }
-    refused_ = std::make_unique<RateLimitedLog>(context.Logger(), 1s);
+    refused_ = std::make_unique<RejectLog>(context.Logger(), "message refused", 1s, "refused");
+    dropped_ = std::make_unique<RejectLog>(context.Logger(), "udp datagram dropped", 1s);
 
     try {
-      OpenUdp(p.GetInt("control_port", 10300), [this](std::string_view d) { return OnControl(d); }, "control");
-      OpenUdp(p.GetInt("blue_port", 10301), [this](std::string_view d) { return OnRobotControl(Team::kBlue, d); },
-              "blue");
-      OpenUdp(p.GetInt("yellow_port", 10302),
-              [this](std::string_view d) { return OnRobotControl(Team::kYellow, d); }, "yellow");
+      OpenUdp(p.GetInt("control_port", 10300), "control", [this](std::string_view d) { return OnControl(d); },
+              [](const WireError& e) { return Refusal<SimulatorResponse>(e); });
+      OpenUdp(p.GetInt("blue_port", 10301), "blue",
+              [this](std::string_view d) { return OnRobotControl(Team::kBlue, d); },
+              [](const WireError& e) { return Refusal<RobotControlResponse>(e); });
+      OpenUdp(p.GetInt("yellow_port", 10302), "yellow",
+              [this](std::string_view d) { return OnRobotControl(Team::kYellow, d); },
+              [](const WireError& e) { return Refusal<RobotControlResponse>(e); });
       if (p.Has("sync")) {
         const ParamView s = p["sync"];
         sync_.port = static_cast<std::uint16_t>(s["port"].AsInt());
@@ -80,9 +104,11 @@ class SslSimulationTransport final : public Transport {
     } catch (const std::runtime_error& e) {
       throw PluginError(e.what());
     }
-    for (auto& port : udp_) port->Start();
-    if (sync_server_) sync_server_->Start();
-    io_thread_ = std::thread([this] { io_.run(); });
+    for (auto& port : udp_) port->server->Start();
+    if (sync_server_) {
+      sync_server_->Start();
+      io_thread_ = std::thread([this] { io_.run(); });
+    }
   }
 
   void Publish(const WorldSnapshot& snapshot) override { bridge_.OnPublish(snapshot); }
@@ -91,7 +117,8 @@ class SslSimulationTransport final : public Transport {
   std::string Endpoint() const override {
     std::string out = "udp";
     for (std::size_t i = 0; i < udp_.size(); ++i) {
-      out += (i ? ", " : " ") + address_ + ":" + std::to_string(udp_[i]->Port()) + " (" + udp_names_[i] + ")";
+      out += (i ? ", " : " ") + address_ + ":" + std::to_string(udp_[i]->server->LocalEndpoint().port()) + " (" +
+             udp_[i]->name + ")";
     }
     if (sync_server_) {
       out += "; tcp " + address_ + ":" + std::to_string(sync_.port) + " (sync, " + ToString(sync_.team) + ")";
@@ -100,20 +127,59 @@ class SslSimulationTransport final : public Transport {
   }
 
   void Stop() override {
-    // The worker first (it may wait for steps that will not come), then the sockets' thread.
+    // The worker first (it may wait for steps that will not come), then the sockets' threads.
     bridge_.Cancel();
+    for (auto& port : udp_) port->server->Stop();
     if (sync_server_) sync_server_->StopWorker();
     io_.stop();
     if (io_thread_.joinable()) io_thread_.join();
     sync_server_.reset();
     udp_.clear();
+    if (refused_) refused_->Flush();
+    if (dropped_) dropped_->Flush();
   }
 
  private:
-  void OpenUdp(std::int64_t port, UdpPort::Handler handler, const char* name) {
+  // Binds one request port; every datagram is answered to its sender, also one too large to read.
+  void OpenUdp(std::int64_t port, const char* name, std::function<std::string(std::string_view)> answer,
+               std::function<std::string(const WireError&)> refuse) {
     if (port == 0) return;  // switched off in the world file
-    udp_.push_back(std::make_unique<UdpPort>(io_, address_, static_cast<std::uint16_t>(port), std::move(handler)));
-    udp_names_.emplace_back(name);
+    auto p = std::make_unique<UdpPort>(UdpPort{name, std::move(answer), std::move(refuse), nullptr});
+    UdpPort* raw = p.get();  // stays put: the port is owned through a pointer
+    UdpServer::Options o;
+    o.address = address_;
+    o.port = static_cast<std::uint16_t>(port);
+    o.max_datagram = max_message_;
+    o.name = std::string("ssl_simulation ") + name;
+    raw->server = std::make_unique<UdpServer>(
+        o,
+        [raw](std::span<const std::uint8_t> bytes, const UdpEndpoint& from) {
+          // Always answered, even with zero bytes (an empty response message). Best effort, as UDP
+          // is: a full socket buffer or a vanished client loses this reply only.
+          const std::string reply =
+              raw->answer(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+          raw->server->Reply(from, AsBytes(reply));
+        },
+        [this, raw](const DropReason& why, const UdpEndpoint& from) { OnDrop(*raw, why, from); });
+    udp_.push_back(std::move(p));
+  }
+
+  void OnDrop(UdpPort& port, const DropReason& why, const UdpEndpoint& from) {
+    if (why.kind != DropReason::Kind::kOversized) {
+      dropped_->Reject(port.name + ": " + why.text + " (" + transport::ToString(from) + ")");
+      return;
+    }
+    const WireError e{codes::kOversized, why.text + " (max_message_size)"};
+    CountRefused(port.name.c_str(), {e});
+    port.server->Reply(from, AsBytes(port.refuse(e)));
+  }
+
+  // The reply to a message refused before it was read: the port's response with that one error.
+  template <typename Response>
+  static std::string Refusal(const WireError& e) {
+    Response r;
+    AppendErrors({e}, r.mutable_errors());
+    return r.SerializeAsString();
   }
 
   // Whether a robot exists. Before the first step there is no published state, so ask the kernel
@@ -146,21 +212,20 @@ class SslSimulationTransport final : public Transport {
 
   void CountRefused(const char* port, const std::vector<WireError>& errors) {
     if (errors.empty()) return;
-    refused_->Count(std::string(port) + ": " + errors.front().code + ": " + errors.front().message);
+    refused_->Reject(std::string(port) + ": " + errors.front().code + ": " + errors.front().message);
   }
 
   std::string OnControl(std::string_view datagram) {
-    SimulatorResponse response;
     SimulatorCommand command;
     if (auto e = ParseMessage(datagram.data(), datagram.size(), max_message_, command)) {
       CountRefused("control", {*e});
-      AppendErrors({*e}, response.mutable_errors());
-    } else {
-      Mapped m = MapSimulatorCommand(command, [this](const RobotId& id) { return RobotExists(id); }, Options());
-      if (m.refused) CountRefused("control", m.errors);
-      Post(m.events);
-      AppendErrors(m.errors, response.mutable_errors());
+      return Refusal<SimulatorResponse>(*e);
     }
+    SimulatorResponse response;
+    Mapped m = MapSimulatorCommand(command, [this](const RobotId& id) { return RobotExists(id); }, Options());
+    if (m.refused) CountRefused("control", m.errors);
+    Post(m.events);
+    AppendErrors(m.errors, response.mutable_errors());
     // Every datagram gets an answer, even an empty one, so a client knows it arrived.
     return response.SerializeAsString();
   }
@@ -170,9 +235,7 @@ class SslSimulationTransport final : public Transport {
     const char* port = team == Team::kBlue ? "blue" : "yellow";
     if (auto e = ParseMessage(datagram.data(), datagram.size(), max_message_, control)) {
       CountRefused(port, {*e});
-      RobotControlResponse r;
-      AppendErrors({*e}, r.mutable_errors());
-      return r.SerializeAsString();
+      return Refusal<RobotControlResponse>(*e);
     }
     MappedRobotControl m = MapRobotControl(control, team, [this](const RobotId& id) { return RobotExists(id); },
                                            Options());
@@ -254,11 +317,11 @@ class SslSimulationTransport final : public Transport {
   MappingOptions options_;
   SyncSettings sync_;
   SimBridge bridge_;
-  std::unique_ptr<RateLimitedLog> refused_;
-  // The io_context outlives every socket made on it (members are destroyed in reverse order).
+  std::unique_ptr<RejectLog> refused_;  // messages refused with an error reply; thread-safe
+  std::unique_ptr<RejectLog> dropped_;  // datagrams lost to the network (failed receives and replies)
+  std::vector<std::unique_ptr<UdpPort>> udp_;  // each with its own receive thread
+  // The io_context (sync's TCP sockets) outlives every socket made on it (reverse destruction order).
   boost::asio::io_context io_;
-  std::vector<std::unique_ptr<UdpPort>> udp_;
-  std::vector<std::string> udp_names_;
   std::unique_ptr<SyncServer> sync_server_;
   std::thread io_thread_;
 };

@@ -5,8 +5,11 @@
 
 namespace ubersim::transport {
 
-RejectLog::RejectLog(Log& log, std::string what, std::chrono::milliseconds interval)
-    : log_(log), what_(std::move(what)), interval_(interval) {}
+RejectLog::RejectLog(Log& log, std::string what, std::chrono::milliseconds interval, std::string counted_as)
+    : log_(log),
+      what_(std::move(what)),
+      counted_as_(counted_as.empty() ? std::string() : " " + counted_as),
+      interval_(interval) {}
 
 void RejectLog::Reject(std::string_view reason) {
   std::lock_guard lock(mutex_);
@@ -32,7 +35,7 @@ std::uint64_t RejectLog::Count() const {
 }
 
 void RejectLog::WriteLocked(std::string_view reason) {
-  log_.Warning(what_ + ": " + std::string(reason) + " (" + std::to_string(unreported_) +
+  log_.Warning(what_ + ": " + std::string(reason) + " (" + std::to_string(unreported_) + counted_as_ +
                " since the last report, " + std::to_string(total_) + " in total)");
   unreported_ = 0;
 }

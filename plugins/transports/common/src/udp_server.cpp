@@ -45,11 +45,11 @@ struct UdpServer::Impl {
   std::atomic<std::uint64_t> received{0};
   std::atomic<std::uint64_t> dropped{0};
 
-  void Drop(const std::string& reason, const UdpEndpoint& from) {
+  void Drop(DropReason::Kind kind, std::string text, const UdpEndpoint& from) {
     ++dropped;
     if (!on_drop) return;
     try {
-      on_drop(reason, from);
+      on_drop(DropReason{kind, std::move(text)}, from);
     } catch (const std::exception&) {
       // A reporting callback must not end the receive loop.
     }
@@ -60,16 +60,17 @@ struct UdpServer::Impl {
       if (ec == asio::error::operation_aborted || !socket.is_open()) return;
       if (ec) {
         // E.g. an ICMP "port unreachable" after a reply to a closed port: report, keep serving.
-        Drop("receive failed: " + ec.message(), sender);
+        Drop(DropReason::Kind::kReceiveFailed, "receive failed: " + ec.message(), sender);
       } else if (n > options.max_datagram) {
         // The buffer is one byte longer than allowed, so a longer datagram shows as n > max.
-        Drop("datagram longer than " + std::to_string(options.max_datagram) + " bytes", sender);
+        Drop(DropReason::Kind::kOversized, "datagram longer than " + std::to_string(options.max_datagram) + " bytes",
+             sender);
       } else {
         ++received;
         try {
           handler(std::span<const std::uint8_t>(buffer.data(), n), sender);
         } catch (const std::exception& e) {
-          Drop(std::string("handler threw: ") + e.what(), sender);
+          Drop(DropReason::Kind::kHandlerThrew, std::string("handler threw: ") + e.what(), sender);
         }
       }
       Receive();
@@ -80,7 +81,7 @@ struct UdpServer::Impl {
     boost::system::error_code ec;
     socket.send_to(asio::buffer(bytes.data(), bytes.size()), to, 0, ec);
     if (ec) {
-      Drop("reply to " + ToString(to) + " failed: " + ec.message(), to);
+      Drop(DropReason::Kind::kReplyFailed, "reply to " + ToString(to) + " failed: " + ec.message(), to);
       return false;
     }
     return true;
@@ -113,7 +114,7 @@ void UdpServer::Start() {
     try {
       impl->io.run();
     } catch (const std::exception& e) {
-      impl->Drop(std::string("receive thread stopped: ") + e.what(), UdpEndpoint());
+      impl->Drop(DropReason::Kind::kStopped, std::string("receive thread stopped: ") + e.what(), UdpEndpoint());
     }
   });
 }

@@ -16,8 +16,10 @@ namespace ubersim::transport {
 /// and how many came since the last line. Thread-safe.
 class RejectLog {
  public:
-  /// `what` starts each line ("grSim datagram rejected").
-  RejectLog(Log& log, std::string what, std::chrono::milliseconds interval = std::chrono::seconds(1));
+  /// `what` starts each line ("grSim datagram rejected"); `counted_as` names the count
+  /// ("refused": "(3 refused since the last report, …)"; empty: "(3 since the last report, …)").
+  RejectLog(Log& log, std::string what, std::chrono::milliseconds interval = std::chrono::seconds(1),
+            std::string counted_as = {});
   /// Counts one rejection; may write a warning.
   void Reject(std::string_view reason);
   /// Writes a last line for rejections not yet reported (call from Stop).
@@ -30,6 +32,7 @@ class RejectLog {
 
   Log& log_;
   std::string what_;
+  std::string counted_as_;  // "" or " refused", as written after the number
   std::chrono::milliseconds interval_;
   mutable std::mutex mutex_;
   std::uint64_t total_ = 0;

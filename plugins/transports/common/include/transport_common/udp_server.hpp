@@ -22,6 +22,22 @@ std::string ToString(const UdpEndpoint& endpoint);
 /// throws std::runtime_error naming `what` and the bad text.
 UdpEndpoint MakeEndpoint(const std::string& address, std::uint16_t port, const std::string& what);
 
+/// Why a UdpServer dropped a datagram (or a reply): the kind, for a transport that answers some
+/// drops (e.g. an oversized request with an error reply), and the text, for its log.
+struct DropReason {
+  enum class Kind {
+    kOversized,      ///< longer than Options::max_datagram; the sender is known, so it can be told
+    kReceiveFailed,  ///< the socket reported an error (e.g. an ICMP refusal of an earlier reply)
+    kHandlerThrew,   ///< the datagram handler threw
+    kReplyFailed,    ///< Reply could not send; the endpoint is the destination
+    kStopped,        ///< the receive thread ended on an exception
+  };
+  Kind kind;
+  std::string text;  ///< "datagram longer than 8192 bytes"
+  /// Lets a handler that only logs take the reason as text.
+  operator const std::string&() const { return text; }
+};
+
 /// A UDP socket bound to one address:port, received on its own thread (a Boost.Asio io_context),
 /// each whole datagram handed to a handler with its sender. Thread-safe Reply. Datagrams longer
 /// than `max_datagram` are dropped and reported, never handed over cut short.
@@ -29,8 +45,9 @@ class UdpServer {
  public:
   /// What arrived: the bytes (valid during the call) and who sent them.
   using Handler = std::function<void(std::span<const std::uint8_t> bytes, const UdpEndpoint& sender)>;
-  /// Why a datagram was not handed over ("datagram longer than 8192 bytes"), and from whom.
-  using DropHandler = std::function<void(const std::string& reason, const UdpEndpoint& sender)>;
+  /// Why a datagram was not handed over, and from whom; runs on the receive thread (except for a
+  /// failed Reply, on the caller's), so it may Reply to the sender.
+  using DropHandler = std::function<void(const DropReason& reason, const UdpEndpoint& sender)>;
 
   /// Where to listen and how large a datagram may be.
   struct Options {
