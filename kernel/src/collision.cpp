@@ -2,6 +2,7 @@
 #include "ubersim/kernel/collision.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <stdexcept>
 
@@ -75,6 +76,39 @@ Vec3 BallSlip(const GeomImpl& a, const GeomImpl& b, const Vec3& p, const Vec3& n
 
 }  // namespace
 
+int SpreadContacts(std::vector<dContactGeom>& contacts, int found, int keep) {
+  if (found <= keep) return found;
+  // ODE's colliders return the first points they find, often all along one edge (a convex
+  // resting on a plane gets four neighbouring corners and tips over). Keep the deepest point,
+  // then each time the candidate farthest from those kept: a spread the solver can stand on.
+  std::vector<int> chosen;
+  int deepest = 0;
+  for (int i = 1; i < found; ++i) {
+    if (contacts[static_cast<std::size_t>(i)].depth > contacts[static_cast<std::size_t>(deepest)].depth) deepest = i;
+  }
+  chosen.push_back(deepest);
+  std::vector<double> gap(static_cast<std::size_t>(found), std::numeric_limits<double>::infinity());
+  auto distance2 = [&](int i, int j) {
+    const dReal* p = contacts[static_cast<std::size_t>(i)].pos;
+    const dReal* q = contacts[static_cast<std::size_t>(j)].pos;
+    return (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+  };
+  while (static_cast<int>(chosen.size()) < keep) {
+    int next = -1;
+    for (int i = 0; i < found; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i);
+      gap[k] = std::min(gap[k], distance2(i, chosen.back()));
+      if (std::find(chosen.begin(), chosen.end(), i) == chosen.end() && (next < 0 || gap[k] > gap[static_cast<std::size_t>(next)])) next = i;
+    }
+    chosen.push_back(next);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  std::vector<dContactGeom> kept;
+  for (int i : chosen) kept.push_back(contacts[static_cast<std::size_t>(i)]);
+  std::copy(kept.begin(), kept.end(), contacts.begin());
+  return keep;
+}
+
 Broadphase ParseBroadphase(const std::string& name) {
   if (name == "scene_graph") return Broadphase::kSceneGraph;
   if (name == "hash") return Broadphase::kHash;
@@ -127,7 +161,7 @@ CollisionManager::CollisionManager(SceneGraph& graph, Broadphase broadphase, int
       broadphase_(Broadphase::kSceneGraph),
       max_contacts_(std::clamp(max_contacts, 1, 64)),
       contacts_(dJointGroupCreate(0)),
-      scratch_(static_cast<std::size_t>(max_contacts_)) {
+      scratch_(static_cast<std::size_t>(kContactCandidates)) {
   graph_.SetGeomListener(
       [this](GeomImpl& g) {
         if (space_) dSpaceAdd(space_.get(), g.id());
@@ -268,7 +302,8 @@ void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }
 
 void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
   ++stats_.narrow_tests;
-  const int n = dCollide(a.id(), b.id(), max_contacts_, scratch_.data(), sizeof(dContactGeom));
+  const int n = SpreadContacts(
+      scratch_, dCollide(a.id(), b.id(), kContactCandidates, scratch_.data(), sizeof(dContactGeom)), max_contacts_);
   if (n <= 0) return;
   ++stats_.touching_pairs;
   const SurfaceMaterial pair_surface = materials_.Resolve(a.Material(), b.Material());

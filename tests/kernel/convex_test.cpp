@@ -8,6 +8,7 @@
 
 #include "../common/test_world.hpp"
 #include "ubersim/error.hpp"
+#include "ubersim/kernel/collision.hpp"
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/world.hpp"
 
@@ -90,6 +91,49 @@ TEST(Convex, ShapesODEWouldGetWrongAreRefused) {
   g.shape.indices[3] = 99;
   EXPECT_THROW(node.AddGeom(g, nullptr), PluginError);
   EXPECT_THROW(Shape::Prism({Vec3::Zero(), Vec3::UnitX()}, 0.1), PluginError);
+}
+
+TEST(Convex, AManyCorneredPrismRestsLevelOnFourSpreadContacts) {
+  // A robot-like shell: a 33-corner outline. ODE reports its resting contacts in corner order,
+  // all along one side; the collision manager keeps a spread four, so it stands level.
+  Scene s;
+  SceneNode& node = s.world.scene().Root().AddChild("shell");
+  BodySpec b;
+  b.name = "shell";
+  b.mass = MassSpec::Solid(Shape::Cylinder(0.09, 0.13), 2.5);
+  b.pose.position = Vec3(0, 0, 0.066);
+  Body& body = node.AddBody(b);
+  std::vector<Vec3> outline;
+  for (int i = 0; i <= 32; ++i) {
+    const double a = 0.68 + (2 * M_PI - 1.36) * i / 32;
+    outline.emplace_back(0.09 * std::cos(a), 0.09 * std::sin(a), 0);
+  }
+  GeomSpec g;
+  g.name = "shell";
+  g.shape = Shape::Prism(outline, 0.13);
+  node.AddGeom(g, &body);
+  for (int i = 0; i < 3000; ++i) s.world.Step();
+  const Vec3 up = body.GetPose().orientation * Vec3::UnitZ();
+  EXPECT_GT(up.z(), std::cos(0.5 * M_PI / 180)) << "tilted by " << std::acos(up.z()) * 180 / M_PI << "°";
+  EXPECT_NEAR(body.GetPose().position.z(), 0.065, 0.001);
+}
+
+TEST(SpreadContacts, KeepsTheDeepestAndThenTheFarthestPoints) {
+  // 12 candidate points along a quarter circle, as ODE lists them, the deepest in the middle.
+  std::vector<dContactGeom> c(kContactCandidates);
+  for (int i = 0; i < 12; ++i) {
+    const double a = 0.5 * M_PI * i / 11;
+    c[static_cast<std::size_t>(i)].pos[0] = std::cos(a);
+    c[static_cast<std::size_t>(i)].pos[1] = std::sin(a);
+    c[static_cast<std::size_t>(i)].pos[2] = 0;
+    c[static_cast<std::size_t>(i)].depth = i == 5 ? 0.002 : 0.001;
+  }
+  ASSERT_EQ(SpreadContacts(c, 12, 3), 3);
+  // The deepest (5), then the ends farthest from it (0 and 11), in their original order.
+  EXPECT_DOUBLE_EQ(c[0].pos[0], 1.0);
+  EXPECT_NEAR(c[1].pos[0], std::cos(0.5 * M_PI * 5 / 11), 1e-12);
+  EXPECT_NEAR(c[2].pos[1], 1.0, 1e-12);
+  EXPECT_EQ(SpreadContacts(c, 2, 4), 2);  // fewer than kept: untouched
 }
 
 }  // namespace

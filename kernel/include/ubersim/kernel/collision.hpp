@@ -23,6 +23,15 @@ enum class Broadphase {
 
 /// Parses "scene_graph", "hash" or "sap"; throws std::invalid_argument otherwise.
 Broadphase ParseBroadphase(const std::string& name);
+
+/// How many contact points ODE may report for one pair before they are thinned to the world's
+/// max_contacts.
+inline constexpr int kContactCandidates = 64;
+
+/// Thins the first `found` contacts to at most `keep`: the deepest, then each time the one
+/// farthest from those kept (ODE reports points in the order it finds them, often along one
+/// edge). Returns how many remain at the front of `contacts`.
+int SpreadContacts(std::vector<dContactGeom>& contacts, int found, int keep);
 /// The model-file name of a broadphase.
 const char* ToString(Broadphase b);
 
