@@ -97,49 +97,21 @@ class DiffDrive final : public ubersim::Drive {
       caster_surface.mu = p["caster_surface"].GetDouble("mu", caster_surface.mu);
     }
 
-    ubersim::Body& chassis = ctx.Chassis();
-    const ubersim::Pose chassis_pose = chassis.GetPose();
     // The robot stands on the carpet at z = 0; the chassis origin (its centre of mass) is this high.
-    const double chassis_z = chassis_pose.position.z();
+    const double chassis_z = ctx.Chassis().GetPose().position.z();
     const char* names[2] = {"wheel_left", "wheel_right"};
     for (int i = 0; i < 2; ++i) {
       const double side = i == 0 ? 1.0 : -1.0;  // left wheel at +y
-      const Vec3 centre_local(axle_x, side * 0.5 * separation_, wheel_radius_ - chassis_z);
-      // The cylinder's z axis is the axle, along +y for both wheels: a positive hinge rate then
-      // rolls the robot forward (+x).
-      const ubersim::Quat axle_local = ubersim::Quat::FromTwoVectors(Vec3::UnitZ(), Vec3::UnitY());
-      ubersim::SceneNode& node = ctx.Node().AddChild(names[i]);
-      ubersim::BodySpec bs;
-      bs.name = "wheel";
-      bs.mass = ubersim::MassSpec::Solid(ubersim::Shape::Cylinder(wheel_radius_, width), mass);
-      bs.pose = chassis_pose.Compose(ubersim::Pose{centre_local, axle_local});
-      bs.twist = chassis.GetTwist();
-      ubersim::Body& wheel = node.AddBody(bs);
-      // As in the omni drive: a wide cylinder on a plane touches it at both rims and the rims
-      // would set the track; the carpet sees a sphere (one contact under the axle), everything
-      // else the cylinder.
-      ubersim::GeomSpec tyre;
-      tyre.name = "tyre";
-      tyre.shape = ubersim::Shape::Cylinder(wheel_radius_, width);
-      tyre.material = tyre_surface;
-      ubersim::Geom& tyre_geom = node.AddGeom(tyre, &wheel);
-      ubersim::GeomSpec contact = tyre;
-      contact.name = "carpet_contact";
-      contact.shape = ubersim::Shape::Sphere(wheel_radius_);
-      ubersim::Geom& contact_geom = node.AddGeom(contact, &wheel);
-      ctx.ObserveContacts(tyre_geom, [](const ubersim::Contact& c, ubersim::SurfaceMaterial&,
-                                        bool& accept) { accept = accept && !OnCarpet(c); });
-      ctx.ObserveContacts(contact_geom, [](const ubersim::Contact& c, ubersim::SurfaceMaterial&,
-                                           bool& accept) { accept = accept && OnCarpet(c); });
-      ubersim::JointSpec js;
-      js.name = "axle";
-      js.kind = ubersim::JointKind::kHinge;
-      js.parent = &chassis;
-      js.child = &wheel;
-      js.anchor = bs.pose.position;
-      js.axis = chassis_pose.orientation * Vec3::UnitY();
-      wheels_[i] = &node.AddJoint(js);
-      wheels_[i]->SetMotor(0.0, max_torque_);  // a powered-off robot still holds its wheels
+      ubersim::WheelSpec w;
+      w.node_name = names[i];
+      w.centre = Vec3(axle_x, side * 0.5 * separation_, wheel_radius_ - chassis_z);
+      w.axle = Vec3::UnitY();  // both along +y: a positive rate rolls the robot forward (+x)
+      w.radius = wheel_radius_;
+      w.width = width;
+      w.mass = mass;
+      w.tyre = tyre_surface;
+      w.holding_torque = max_torque_;
+      wheels_[i] = &ubersim::AddDrivenWheel(ctx, w);
     }
     AddCasters(ctx, p, caster_surface, chassis_z);
   }

@@ -59,58 +59,27 @@ class OmniDrive final : public ubersim::Drive {
                                  std::to_string(body.ground_clearance) + " m)");
     }
 
-    ubersim::Body& chassis = ctx.Chassis();
-    const ubersim::Pose chassis_pose = chassis.GetPose();
     // The robot stands on the carpet at z = 0; the chassis origin (its centre of mass) is this high.
-    const double chassis_z = chassis_pose.position.z();
+    const double chassis_z = ctx.Chassis().GetPose().position.z();
     const ubersim::ParamView list = p["wheels"];
     for (std::size_t i = 0; i < list.Size(); ++i) {
       Wheel w;
       w.angle = list.At(i)["angle_deg"].AsDouble() * M_PI / 180.0;
       const Vec3 radial(std::cos(w.angle), std::sin(w.angle), 0.0);
       w.tangent = Vec3(-std::sin(w.angle), std::cos(w.angle), 0.0);
-      const Vec3 centre_local = radial * distance_ + Vec3(0, 0, wheel_radius_ - chassis_z);
-      // The cylinder's z axis is the axle, pointing inward: a positive hinge rate then rolls the
-      // robot along `tangent` (counter-clockwise about its centre).
-      const ubersim::Quat axle_local = ubersim::Quat::FromTwoVectors(Vec3::UnitZ(), -radial);
-
-      ubersim::SceneNode& node = ctx.Node().AddChild("wheel" + std::to_string(i));
-      ubersim::BodySpec bs;
-      bs.name = "wheel";
-      bs.mass = ubersim::MassSpec::Solid(ubersim::Shape::Cylinder(wheel_radius_, width), mass);
-      bs.pose = chassis_pose.Compose(ubersim::Pose{centre_local, axle_local});
-      bs.twist = chassis.GetTwist();
-      ubersim::Body& wheel = node.AddBody(bs);
-      // Two geometries per wheel. A wide cylinder on a plane touches it at both rims, and the
-      // inner rim then sets the turning radius (a robot turning in place ran 6 % fast). A real
-      // omni wheel touches at one roller under the axle: the carpet sees a sphere of the wheel's
-      // radius (one contact straight below the centre), everything else sees the cylinder.
-      ubersim::GeomSpec tyre;
-      tyre.name = "tyre";
-      tyre.shape = ubersim::Shape::Cylinder(wheel_radius_, width);
-      tyre.material = surface;
-      tyre.friction_axis = Vec3::UnitZ();  // body frame: the axle
-      ubersim::Geom& tyre_geom = node.AddGeom(tyre, &wheel);
-      ubersim::GeomSpec roller = tyre;
-      roller.name = "roller_contact";
-      roller.shape = ubersim::Shape::Sphere(wheel_radius_);
-      ubersim::Geom& roller_geom = node.AddGeom(roller, &wheel);
-      auto on_carpet = [](const ubersim::Contact& c) {
-        return c.other->GetShape().kind == ubersim::Shape::Kind::kPlane;
-      };
-      ctx.ObserveContacts(tyre_geom, [on_carpet](const ubersim::Contact& c, ubersim::SurfaceMaterial&,
-                                                 bool& accept) { accept = accept && !on_carpet(c); });
-      ctx.ObserveContacts(roller_geom, [on_carpet](const ubersim::Contact& c, ubersim::SurfaceMaterial&,
-                                                   bool& accept) { accept = accept && on_carpet(c); });
-      ubersim::JointSpec js;
-      js.name = "axle";
-      js.kind = ubersim::JointKind::kHinge;
-      js.parent = &chassis;
-      js.child = &wheel;
-      js.anchor = bs.pose.position;
-      js.axis = bs.pose.orientation * Vec3::UnitZ();
-      w.hinge = &node.AddJoint(js);
-      w.hinge->SetMotor(0.0, max_torque_);  // a powered-off robot still holds its wheels
+      ubersim::WheelSpec spec;
+      spec.node_name = "wheel" + std::to_string(i);
+      spec.centre = radial * distance_ + Vec3(0, 0, wheel_radius_ - chassis_z);
+      // The axle points inward: a positive rate then rolls the robot along `tangent`
+      // (counter-clockwise about its centre).
+      spec.axle = -radial;
+      spec.radius = wheel_radius_;
+      spec.width = width;
+      spec.mass = mass;
+      spec.tyre = surface;
+      spec.rollers_along_axle = true;  // mu along the axle (free rollers), mu2 across it
+      spec.holding_torque = max_torque_;
+      w.hinge = &ubersim::AddDrivenWheel(ctx, spec);
       wheels_.push_back(w);
     }
     // Least-squares inverse of the wheel geometry, for odometry feedback.

@@ -11,4 +11,5 @@
 #include "ubersim/servo.hpp"
 #include "ubersim/transport.hpp"
 #include "ubersim/version.hpp"
+#include "ubersim/wheel.hpp"
 #include "ubersim/world_state.hpp"
