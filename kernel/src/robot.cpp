@@ -319,8 +319,9 @@ RobotState Robot::State() const {
   s.twist = chassis_->GetTwist();
   s.radius = model_->body.radius;
   s.height = model_->body.height;
-  if (dribbler_) s.dribbler_ball_contact = dribbler_->TouchesBall();
-  if (kicker_) s.kicker_ready = kicker_->Ready();
+  // A robot off the field touches nothing and kicks nothing, whatever its parts last saw.
+  if (dribbler_ && present_) s.dribbler_ball_contact = dribbler_->TouchesBall();
+  if (kicker_ && present_) s.kicker_ready = kicker_->Ready();
   return s;
 }
 

@@ -44,6 +44,20 @@ TEST(RollerDribbler, TouchesBallReportsTheContact) {
   EXPECT_FALSE(w.Robot().dribbler_ball_contact) << "reset once the ball has gone";
 }
 
+TEST(RollerDribbler, ARobotTakenOffTheFieldReportsNoContact) {
+  PartsWorld w;
+  w.PlaceBallInMouth();
+  w.Run(0.01, std::nullopt, std::nullopt, kDribble);
+  ASSERT_TRUE(w.Robot().dribbler_ball_contact);
+  ASSERT_TRUE(w.Robot().kicker_ready);
+  w.world->events().Post(PositionEvent{Target::Robot(PartsWorld::kRobot), std::nullopt, std::nullopt, std::nullopt,
+                                       std::nullopt, false});
+  w.Run(0.01, std::nullopt, std::nullopt, kDribble);
+  EXPECT_FALSE(w.Robot().present);
+  EXPECT_FALSE(w.Robot().dribbler_ball_contact);
+  EXPECT_FALSE(w.Robot().kicker_ready);
+}
+
 TEST(RollerDribbler, SpinsTheBallBackAgainstTheRobot) {
   PartsWorld w;
   w.Run(0.2);
