@@ -14,12 +14,8 @@ namespace ubersim::validation::detail {
 namespace {
 
 constexpr const char* kDiffRobot = "robots/cmdragons-2003-diff.yaml";
-const RobotId kRobot{Team::kBlue, 0};
-
 kernel::WorldModel PaperWorld(const Environment& env, double x, double y, double yaw) {
-  kernel::WorldModel w = LoadWorld(env, "worlds/ssl-2003.yaml");
-  w.robots.clear();
-  w.robots.push_back(kernel::RobotPlacement{kRobot, LoadRobot(env, kDiffRobot), x, y, yaw, true});
+  kernel::WorldModel w = OneRobotWorld(env, "worlds/ssl-2003.yaml", kDiffRobot, x, y, yaw);
   w.ball_start = Vec3(0.5 * w.field->geometry.field_length - 0.2, 0.5 * w.field->geometry.field_width - 0.2, 0);
   return w;
 }

@@ -12,7 +12,6 @@ namespace ubersim::validation::detail {
 namespace {
 
 constexpr const char* kRobotFile = "robots/ssl-omni-2026.yaml";
-const RobotId kRobot{Team::kBlue, 0};
 constexpr double kRadioPeriod = 0.01;  // s: a 100 Hz radio
 
 struct PartsBench {
@@ -68,9 +67,7 @@ struct PartsBench {
 
 // The robot alone on the Div B field at (-2, 0) facing +x, the ball resting against its front.
 kernel::WorldModel RobotWithBall(const Environment& env) {
-  kernel::WorldModel w = LoadWorld(env, "worlds/div-b.yaml");
-  w.robots.clear();
-  w.robots.push_back(kernel::RobotPlacement{kRobot, LoadRobot(env, kRobotFile), -2.0, 0.0, 0.0, true});
+  kernel::WorldModel w = OneRobotWorld(env, "worlds/div-b.yaml", kRobotFile, -2.0, 0.0, 0.0);
   const double front = w.robots.front().model->body.front_distance;
   w.ball_start = Vec3(-2.0 + front + w.ball->radius + 0.002, 0.0, 0.0);
   return w;

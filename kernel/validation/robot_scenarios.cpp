@@ -11,15 +11,12 @@ namespace ubersim::validation::detail {
 namespace {
 
 constexpr const char* kOmniRobot = "robots/ssl-omni-2026.yaml";
-const RobotId kRobot{Team::kBlue, 0};
 
-// One robot of `robot_file` alone on the Div B field at (-2, 0), the ball out of the way.
-kernel::WorldModel OneRobot(const Environment& env, const std::string& world, const std::string& robot_file,
-                            double x = -2.0, double y = 0.0, double yaw = 0.0) {
-  kernel::WorldModel w = LoadWorld(env, world);
-  w.robots.clear();
-  w.robots.push_back(kernel::RobotPlacement{kRobot, LoadRobot(env, robot_file), x, y, yaw, true});
-  w.ball_start = Vec3(0.5 * w.field->geometry.field_length - 0.5, 0.5 * w.field->geometry.field_width - 0.3, 0);
+// One robot alone on a field at (-2, 0), the ball in a far corner out of the way.
+kernel::WorldModel OneRobot(const Environment& env, const std::string& world, const std::string& robot_file) {
+  kernel::WorldModel w = OneRobotWorld(env, world, robot_file, -2.0, 0.0, 0.0);
+  const FieldGeometry& g = w.field->geometry;
+  w.ball_start = Vec3(0.5 * g.field_length - 0.5, 0.5 * g.field_width - 0.3, 0);
   return w;
 }
 

@@ -25,6 +25,14 @@ std::shared_ptr<const kernel::RobotModel> LoadRobot(const Environment& env, cons
   return Loader(env).LoadRobot(env.models_dir / robot);
 }
 
+kernel::WorldModel OneRobotWorld(const Environment& env, const std::string& world, const std::string& robot_file,
+                                 double x, double y, double yaw) {
+  kernel::WorldModel w = LoadWorld(env, world);
+  w.robots.clear();
+  w.robots.push_back(kernel::RobotPlacement{kRobot, LoadRobot(env, robot_file), x, y, yaw, true});
+  return w;
+}
+
 Bench::Bench(const Environment& env, const kernel::WorldModel& model)
     : world_(std::make_unique<kernel::World>(model, *env.registry, *env.log, /*start_transports=*/false)) {}
 

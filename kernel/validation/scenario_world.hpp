@@ -18,6 +18,13 @@ kernel::WorldModel LoadWorld(const Environment& env, const std::string& world);
 /// Loads a shipped robot model.
 std::shared_ptr<const kernel::RobotModel> LoadRobot(const Environment& env, const std::string& robot);
 
+/// The robot the one-robot scenarios drive.
+inline const RobotId kRobot{Team::kBlue, 0};
+/// A shipped world with its robots replaced by kRobot, a robot of `robot_file` at (x, y, yaw)
+/// (m, rad); the caller places the ball.
+kernel::WorldModel OneRobotWorld(const Environment& env, const std::string& world, const std::string& robot_file,
+                                 double x, double y, double yaw);
+
 /// A world being measured, stepped with commands sent at a radio rate.
 class Bench {
  public:

@@ -173,15 +173,27 @@ TEST(Radio, AWorldAppliesCommandsOnlyAfterTheRadioLatency) {
   EXPECT_NE(text.str().find("robot has no dribbler"), std::string::npos) << text.str();
 }
 
-TEST(Perception, AWorldHandsItsFramesToTheObserver) {
-  WorldModel model = testing::BallWorld(Vec3(1, 1, 0));
-  model.perception = OneCamera(75.0, 0.02);
+// A ball-only world (ball at (1, 1)) with one camera, collecting the frames that leave it.
+struct ObservedWorld {
   std::ostringstream text;
-  StreamLog log(text, LogLevel::kWarning);
-  PluginRegistry registry({});
-  World w(model, registry, log, false);
+  StreamLog log{text, LogLevel::kWarning};
+  PluginRegistry registry{{}};
+  World w;
   std::vector<VisionFrame> frames;
-  w.SetVisionObserver([&](const VisionFrame& f) { frames.push_back(f); });
+  ObservedWorld(double rate, double latency) : w(Model(rate, latency), registry, log, false) {
+    w.SetVisionObserver([this](const VisionFrame& f) { frames.push_back(f); });
+  }
+  static WorldModel Model(double rate, double latency) {
+    WorldModel model = testing::BallWorld(Vec3(1, 1, 0));
+    model.perception = OneCamera(rate, latency);
+    return model;
+  }
+};
+
+TEST(Perception, AWorldHandsItsFramesToTheObserver) {
+  ObservedWorld o(75.0, 0.02);
+  World& w = o.w;
+  std::vector<VisionFrame>& frames = o.frames;
   for (int i = 0; i < 1000; ++i) w.Step();
   EXPECT_EQ(frames.size(), 73u);  // captures at k/75 s up to 1 s, less the 20 ms in flight
   ASSERT_EQ(frames.back().balls.size(), 1u);
@@ -189,14 +201,9 @@ TEST(Perception, AWorldHandsItsFramesToTheObserver) {
 }
 
 TEST(Perception, ARealismEventChangesLatencyNoiseAndRadioWhileRunning) {
-  WorldModel model = testing::BallWorld(Vec3(1, 1, 0));
-  model.perception = OneCamera(100.0, 0.02);
-  std::ostringstream text;
-  StreamLog log(text, LogLevel::kWarning);
-  PluginRegistry registry({});
-  World w(model, registry, log, false);
-  std::vector<VisionFrame> frames;
-  w.SetVisionObserver([&](const VisionFrame& f) { frames.push_back(f); });
+  ObservedWorld o(100.0, 0.02);
+  World& w = o.w;
+  std::vector<VisionFrame>& frames = o.frames;
   RealismEvent bad;
   bad.ball_drop = 1.5;
   w.events().Post(bad);
