@@ -16,7 +16,7 @@ PACKAGES=(
   libyaml-cpp-dev rapidjson-dev
   libprotobuf-dev protobuf-compiler
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3-protobuf
+  python3-protobuf python3-yaml
 )
 
 install_missing() {
