@@ -1,0 +1,242 @@
+// SPDX-License-Identifier: Apache-2.0
+// viewer: the browser viewer (docs/viewer.md). Serves its built-in page over HTTP and streams
+// the world to every browser over a WebSocket; the page's controls come back as position and
+// clock events, the same path the protocols' teleports and clock commands take.
+//
+// The simulation thread only copies a compact sample of the world, at most `rate` times per
+// wall-clock second, and each camera frame's detections; encoding and sending happen on the
+// server's own thread, which also keeps only the newest message for a slow browser. So the
+// viewer costs the physics the same whether no browser, a fast one or a stalled one is connected.
+#include <chrono>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include <ubersim/ubersim.hpp>
+
+#include "transport_common/reject_log.hpp"
+#include "ubersim_plugin_schema.hpp"
+#include "viewer_protocol.hpp"
+#include "viewer_server.hpp"
+
+namespace {
+
+using ubersim::viewer::CommandLimits;
+using ubersim::viewer::ViewerServer;
+using ubersim::viewer::ViewerStatus;
+using ubersim::viewer::WorldSample;
+using SteadyClock = std::chrono::steady_clock;
+
+// Sim time standing still this long (wall clock) shows as paused.
+constexpr auto kPausedAfter = std::chrono::milliseconds(500);
+// While the world stands still, how often the viewer asks for the state (to show edits).
+constexpr auto kRefreshWhilePaused = std::chrono::milliseconds(250);
+// Window of the real-time factor and the vision rate.
+constexpr auto kRateWindow = std::chrono::seconds(1);
+
+class ViewerTransport final : public ubersim::Transport {
+ public:
+  ~ViewerTransport() override { Stop(); }
+
+  void Start(ubersim::TransportContext& ctx) override {
+    const ubersim::ParamView& p = ctx.Params();
+    ViewerServer::Options o;
+    o.address = p.GetString("address", o.address);
+    o.port = static_cast<std::uint16_t>(p.GetInt("port", o.port));
+    o.max_clients = static_cast<int>(p.GetInt("max_clients", o.max_clients));
+    const double rate = p.GetDouble("rate", 60.0);
+    period_ = std::chrono::duration_cast<SteadyClock::duration>(std::chrono::duration<double>(1.0 / rate));
+    events_ = &ctx.Events();
+
+    const ubersim::FieldGeometry& field = ctx.Field();
+    limits_.half_length = 0.5 * (field.carpet_length > 0 ? field.carpet_length
+                                                        : field.field_length + 2 * field.boundary_width);
+    limits_.half_width = 0.5 * (field.carpet_width > 0 ? field.carpet_width
+                                                      : field.field_width + 2 * field.boundary_width);
+    hello_ = ubersim::viewer::EncodeHello(ctx.WorldName(), rate, field, ctx.Cameras());
+    refusals_ = std::make_unique<ubersim::transport::RejectLog>(ctx.Logger(), "viewer command refused");
+
+    ViewerServer::Callbacks callbacks;
+    callbacks.hello = [this] { return hello_; };
+    callbacks.on_message = [this](std::string_view text) { return OnMessage(text); };
+    callbacks.latest_state = [this] { return EncodeLatest(); };
+    callbacks.tick = [this] { Tick(); };
+    try {
+      server_ = std::make_unique<ViewerServer>(o, std::move(callbacks), period_, ctx.Logger());
+    } catch (const std::exception& e) {
+      throw ubersim::PluginError(e.what());
+    }
+    server_->Start();
+  }
+
+  void Publish(const ubersim::WorldSnapshot& snapshot) override {
+    const auto now = SteadyClock::now();
+    if (now < next_sample_) return;
+    next_sample_ = now + period_;
+    std::lock_guard lock(mutex_);
+    ubersim::viewer::SampleSnapshot(snapshot, sample_);
+    have_sample_ = true;
+    sample_wall_ = now;
+  }
+
+  void OnVisionFrame(const ubersim::VisionFrame& frame) override {
+    std::lock_guard lock(mutex_);
+    Camera& c = cameras_[frame.camera_id];
+    c.frame = frame;
+    c.received = SteadyClock::now();
+    ++frames_received_;
+  }
+
+  std::string Endpoint() const override {
+    return server_ ? server_->Url() + " (open it in a browser)" : std::string();
+  }
+
+  void Stop() override {
+    if (server_) server_->Stop();
+    if (refusals_) refusals_->Flush();
+  }
+
+ private:
+  struct Camera {
+    ubersim::VisionFrame frame;
+    SteadyClock::time_point received;
+  };
+  struct RateSample {
+    SteadyClock::time_point wall;
+    std::int64_t sim_time_ns;
+    std::uint64_t frames;
+  };
+
+  // Server thread: a page's command → events, and the reply.
+  std::string OnMessage(std::string_view text) {
+    ubersim::viewer::DecodedCommand c = ubersim::viewer::DecodeCommand(text, limits_);
+    if (!c.error.empty()) {
+      refusals_->Reject((c.cmd.empty() ? std::string() : "'" + c.cmd + "': ") + c.error);
+      return ubersim::viewer::EncodeReply(c.cmd, c.id, c.error);
+    }
+    for (ubersim::Event& e : c.events) events_->Post(std::move(e));
+    if (c.speed_factor) speed_factor_ = c.speed_factor;
+    if (c.cmd == "move" || c.cmd == "kick" || c.cmd == "reset") refresh_now_ = true;
+    return ubersim::viewer::EncodeReply(c.cmd, c.id);
+  }
+
+  // Server thread, every sample period: the status, then the state to every browser.
+  void Tick() {
+    const auto now = SteadyClock::now();
+    WorldSample sample;
+    std::vector<ubersim::VisionFrame> frames;
+    RateSample rate;
+    int cameras_seen = 0;
+    {
+      std::lock_guard lock(mutex_);
+      if (!have_sample_) return;
+      sample = sample_;
+      for (const auto& [id, c] : cameras_) {
+        frames.push_back(c.frame);
+        if (now - c.received <= kRateWindow) ++cameras_seen;
+      }
+      rate = RateSample{sample_wall_, sample_.sim_time_ns, frames_received_};
+    }
+    if (rates_.empty() || rate.sim_time_ns != last_sim_time_ns_) {
+      last_sim_time_ns_ = rate.sim_time_ns;
+      last_time_change_ = now;
+    }
+    rates_.push_back(RateSample{now, rate.sim_time_ns, rate.frames});
+    while (rates_.size() > 2 && now - rates_.front().wall > kRateWindow) rates_.pop_front();
+
+    ViewerStatus status;
+    const RateSample& first = rates_.front();
+    const double wall = std::chrono::duration<double>(now - first.wall).count();
+    if (wall > 0) {
+      status.real_time_factor = static_cast<double>(rate.sim_time_ns - first.sim_time_ns) * 1e-9 / wall;
+      status.vision_rate = static_cast<double>(rate.frames - first.frames) / wall /
+                           std::max(1, cameras_seen);
+    }
+    status.cameras = cameras_seen;
+    status.clients = server_->Clients();
+    status.paused = now - last_time_change_ > kPausedAfter;
+    status.speed_factor = speed_factor_;
+    {
+      std::lock_guard lock(mutex_);
+      status_ = status;
+    }
+    if (status.paused || refresh_now_) RefreshWhilePaused(now, sample);
+    if (status.clients == 0) return;
+    server_->Broadcast(std::make_shared<const std::string>(
+        ubersim::viewer::EncodeState(sample, frames, status)));
+  }
+
+  // A world that stands still publishes nothing; ask for the state of every object so that what
+  // a page or another client moved shows (answered on the simulation thread, cheap, and only
+  // while nothing steps).
+  void RefreshWhilePaused(SteadyClock::time_point now, const WorldSample& sample) {
+    if (!refresh_now_ && now - last_refresh_ < kRefreshWhilePaused) return;
+    refresh_now_ = false;
+    last_refresh_ = now;
+    events_->Post(ubersim::QueryEvent{ubersim::Target::Ball(), [this](const ubersim::ObjectState& s) {
+      std::lock_guard lock(mutex_);
+      sample_.ball_position = s.pose.position;
+      sample_.ball_velocity = s.twist.linear;
+    }});
+    for (std::size_t i = 0; i < sample.robots.size(); ++i) {
+      const ubersim::RobotId id = sample.robots[i].id;
+      events_->Post(ubersim::QueryEvent{ubersim::Target::Robot(id), [this, i, id](const ubersim::ObjectState& s) {
+        std::lock_guard lock(mutex_);
+        if (!s.found || i >= sample_.robots.size() || !(sample_.robots[i].id == id)) return;
+        ubersim::viewer::RobotSample& r = sample_.robots[i];
+        r.present = s.present;
+        r.x = s.pose.position.x();
+        r.y = s.pose.position.y();
+        r.yaw = s.pose.Yaw();
+        r.vx = s.twist.linear.x();
+        r.vy = s.twist.linear.y();
+        r.w = s.twist.angular.z();
+      }});
+    }
+  }
+
+  // GET /api/state (server thread).
+  std::string EncodeLatest() {
+    std::lock_guard lock(mutex_);
+    if (!have_sample_) return {};
+    std::vector<ubersim::VisionFrame> frames;
+    for (const auto& [id, c] : cameras_) frames.push_back(c.frame);
+    ViewerStatus status = status_;
+    status.clients = server_->Clients();
+    return ubersim::viewer::EncodeState(sample_, frames, status);
+  }
+
+  // Set in Start, then read-only.
+  SteadyClock::duration period_{};
+  ubersim::EventSink* events_ = nullptr;
+  CommandLimits limits_;
+  std::string hello_;
+  std::unique_ptr<ubersim::transport::RejectLog> refusals_;
+  // Simulation thread only.
+  SteadyClock::time_point next_sample_{};
+  // Shared between the simulation thread (Publish, OnVisionFrame, query replies) and the server
+  // thread (Tick, EncodeLatest).
+  std::mutex mutex_;
+  WorldSample sample_;
+  bool have_sample_ = false;
+  SteadyClock::time_point sample_wall_{};
+  std::map<int, Camera> cameras_;
+  std::uint64_t frames_received_ = 0;
+  ViewerStatus status_;
+  // Server thread only.
+  std::deque<RateSample> rates_;
+  std::int64_t last_sim_time_ns_ = -1;
+  SteadyClock::time_point last_time_change_{};
+  SteadyClock::time_point last_refresh_{};
+  std::optional<double> speed_factor_;
+  bool refresh_now_ = false;
+  // Last: stopped (and its thread joined) before the members above are destroyed.
+  std::unique_ptr<ViewerServer> server_;
+};
+
+}  // namespace
+
+UBERSIM_REGISTER_TRANSPORT(ViewerTransport, "viewer", "1.0.0", ubersim_plugin::kSchema)
