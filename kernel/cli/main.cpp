@@ -90,17 +90,21 @@ int RunCommand(const std::vector<std::string>& args) {
   po::options_description desc(
       "usage: ubersim run [WORLD] [options]\n\n"
       "Runs WORLD (default models/worlds/div-b.yaml) in real time, printing where it publishes\n"
-      "and a live status line (sim time, real-time factor). Ctrl-C stops it.\n\noptions");
+      "(the browser viewer's address among them) and a live status line (sim time, real-time\n"
+      "factor). Ctrl-C stops it.\n\noptions");
   std::string world_arg;
   double duration = 0, speed = 1.0;
   std::string log_level = "info";
   std::vector<std::string> plugin_paths;
+  std::vector<std::string> skipped_transports;
   desc.add_options()("help,h", "this help")
       ("fast", "run as fast as possible instead of real time")
       ("speed", po::value<double>(&speed)->default_value(1.0), "speed factor (sim s per wall s)")
       ("duration", po::value<double>(&duration)->default_value(0), "stop after SECONDS of simulated time (0: run until stopped)")
       ("paused", "start paused")
       ("quiet,q", "no status line")
+      ("no-viewer", "do not start the browser viewer (the same as --no-transport viewer)")
+      ("no-transport", po::value<std::vector<std::string>>(&skipped_transports), "do not start the world's transport ID (repeatable)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)")
       ("log-level", po::value<std::string>(&log_level)->default_value("info"), "debug, info, warning or error");
   po::options_description hidden;
@@ -147,7 +151,16 @@ int RunCommand(const std::vector<std::string>& args) {
     for (const auto& p : ToPaths(plugin_paths)) search.push_back(p);
     PluginRegistry registry(PluginRegistry::DefaultSearchPaths(search));
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(), LookupIn(registry));
-    const WorldModel model = loader.LoadWorld(world_file);
+    WorldModel model = loader.LoadWorld(world_file);
+    if (vm.count("no-viewer")) skipped_transports.push_back("viewer");
+    for (const std::string& id : skipped_transports) {
+      const auto removed = std::erase_if(model.transports, [&](const TransportModel& t) { return t.plugin == id; });
+      if (removed == 0 && id != "viewer") {
+        std::cerr << "ubersim run: --no-transport " << id << ": the world has no such transport\n";
+        return kExitUsage;
+      }
+      if (removed > 0) std::cerr << "ubersim: transport " << id << " not started (--no-" << (id == "viewer" ? "viewer" : "transport") << ")\n";
+    }
     World world(model, registry, log);
 
     std::cerr << "ubersim: world '" << model.name << "' from " << world_file.string() << ": "

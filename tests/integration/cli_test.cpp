@@ -86,6 +86,27 @@ TEST(Cli, RunsTheDefaultWorldFastForAFixedDuration) {
   EXPECT_NE(r.output.find("stopped at sim time 2"), std::string::npos) << r.output;
 }
 
+TEST(Cli, RunPrintsTheViewersAddressAndNoViewerLeavesItOut) {
+  const Result with = RunUbersim("run --fast --duration 0.5 --quiet");
+  EXPECT_EQ(with.exit_code, 0) << with.output;
+  EXPECT_NE(with.output.find("http://127.0.0.1:8080/ (open it in a browser)"), std::string::npos) << with.output;
+
+  const Result without = RunUbersim("run --fast --duration 0.5 --quiet --no-viewer");
+  EXPECT_EQ(without.exit_code, 0) << without.output;
+  EXPECT_EQ(without.output.find("http://"), std::string::npos) << without.output;
+  EXPECT_NE(without.output.find("transport viewer not started (--no-viewer)"), std::string::npos) << without.output;
+
+  const Result grsim_off = RunUbersim("run --fast --duration 0.5 --quiet --no-transport grsim");
+  EXPECT_EQ(grsim_off.exit_code, 0) << grsim_off.output;
+  EXPECT_EQ(grsim_off.output.find("udp 127.0.0.1:20011"), std::string::npos) << grsim_off.output;
+  EXPECT_NE(grsim_off.output.find("http://127.0.0.1:8080/"), std::string::npos) << grsim_off.output;
+
+  const Result typo = RunUbersim("run --fast --duration 0.5 --quiet --no-transport grsm");
+  EXPECT_EQ(typo.exit_code, 2) << typo.output;
+  EXPECT_NE(typo.output.find("--no-transport grsm: the world has no such transport"), std::string::npos)
+      << typo.output;
+}
+
 TEST(Cli, RunPrintsAStatusLineWithSimTimeAndRealTimeFactor) {
   const Result r = RunUbersim("run " + kModels + "/worlds/ssl-2003.yaml --speed 4 --duration 3");
   EXPECT_EQ(r.exit_code, 0) << r.output;

@@ -192,7 +192,7 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   EXPECT_EQ(w.seed, 1u);
   EXPECT_TRUE(w.plugin_paths.empty());
   // SSL-Vision out, grSim and the simulation protocol in, on their usual ports.
-  ASSERT_EQ(w.transports.size(), 3u);
+  ASSERT_EQ(w.transports.size(), 4u);
   EXPECT_EQ(w.transports[0].plugin, "ssl_vision");
   EXPECT_EQ(w.transports[0].params.GetInt("port", 0), 10020);
   EXPECT_EQ(w.transports[1].plugin, "grsim");
@@ -200,6 +200,8 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   EXPECT_EQ(w.transports[2].plugin, "ssl_simulation");
   EXPECT_EQ(w.transports[2].params.GetInt("control_port", 0), 10300);
   EXPECT_EQ(w.transports[2].params.GetString("address", ""), "127.0.0.1");
+  EXPECT_EQ(w.transports[3].plugin, "viewer");
+  EXPECT_EQ(w.transports[3].params.GetInt("port", 0), 8080);
   EXPECT_EQ(w.perception.preset, "realistic");  // today's league: one camera over Div B, 6 m up
   ASSERT_EQ(w.perception.cameras.size(), 1u);
   EXPECT_EQ(w.perception.cameras[0].position, ubersim::Vec3(0, 0, 6));
