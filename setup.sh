@@ -18,10 +18,14 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-protobuf python3-yaml
 )
+# The viewer's end-to-end test drives a real browser: Debian's Chromium through its chromedriver
+# and Selenium. Installed after the rest and not fatal: without them only that test is skipped.
+BROWSER_PACKAGES=(chromium chromium-driver python3-selenium fonts-liberation)
 
+# install_missing PACKAGE...: apt-get installs those not installed yet.
 install_missing() {
   local missing=()
-  for p in "${PACKAGES[@]}"; do
+  for p in "$@"; do
     if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
       missing+=("$p")
     fi
@@ -49,7 +53,10 @@ build() {
 }
 
 mode="${1:-run}"
-install_missing
+install_missing "${PACKAGES[@]}"
+if ! (install_missing "${BROWSER_PACKAGES[@]}"); then
+  echo "setup: could not install ${BROWSER_PACKAGES[*]}; the viewer's browser test will be skipped" >&2
+fi
 [ "$mode" = "--install-only" ] && exit 0
 build
 [ "$mode" = "--no-run" ] && exit 0
