@@ -276,7 +276,7 @@ struct WsClient {
   }
 };
 
-struct ServerFixture : ::testing::Test {
+struct ViewerServerTest : ::testing::Test {
   std::ostringstream log_text;
   kernel::StreamLog log{log_text, LogLevel::kDebug};
   std::atomic<int> ticks{0};
@@ -304,7 +304,7 @@ struct ServerFixture : ::testing::Test {
   }
 };
 
-TEST_F(ServerFixture, ServesEveryFileOfThePageAndTheState) {
+TEST_F(ViewerServerTest, ServesEveryFileOfThePageAndTheState) {
   StartServer();
   ASSERT_NE(FindWebAsset("/index.html"), nullptr);
   ASSERT_EQ(FindWebAsset("/"), FindWebAsset("/index.html"));
@@ -332,7 +332,7 @@ TEST_F(ServerFixture, ServesEveryFileOfThePageAndTheState) {
   EXPECT_TRUE(head.body.empty());
 }
 
-TEST_F(ServerFixture, AWebSocketGetsTheHelloThenStatesAndRepliesToItsCommands) {
+TEST_F(ViewerServerTest, AWebSocketGetsTheHelloThenStatesAndRepliesToItsCommands) {
   StartServer();
   WsClient client(server->Port());
   EXPECT_EQ(client.Read(), R"({"type":"hello"})");
@@ -346,7 +346,7 @@ TEST_F(ServerFixture, AWebSocketGetsTheHelloThenStatesAndRepliesToItsCommands) {
   WaitForClients(0);
 }
 
-TEST_F(ServerFixture, RefusesBrowsersOverTheLimitUntilOneLeaves) {
+TEST_F(ViewerServerTest, RefusesBrowsersOverTheLimitUntilOneLeaves) {
   StartServer(/*max_clients=*/1);
   auto first = std::make_unique<WsClient>(server->Port());
   first->Read();
@@ -359,7 +359,7 @@ TEST_F(ServerFixture, RefusesBrowsersOverTheLimitUntilOneLeaves) {
   EXPECT_EQ(third.Read(), R"({"type":"hello"})");
 }
 
-TEST_F(ServerFixture, ASlowBrowserOnlyEverHasTheNewestStateWaiting) {
+TEST_F(ViewerServerTest, ASlowBrowserOnlyEverHasTheNewestStateWaiting) {
   StartServer();
   WsClient slow(server->Port());
   slow.Read();
@@ -378,7 +378,7 @@ TEST_F(ServerFixture, ASlowBrowserOnlyEverHasTheNewestStateWaiting) {
   EXPECT_LT(received, kStates / 4) << "states were queued for a page that did not read";
 }
 
-TEST_F(ServerFixture, ABusyPortIsRefusedNamingTheAddress) {
+TEST_F(ViewerServerTest, ABusyPortIsRefusedNamingTheAddress) {
   StartServer();
   ViewerServer::Options o;
   o.port = server->Port();
@@ -392,7 +392,7 @@ TEST_F(ServerFixture, ABusyPortIsRefusedNamingTheAddress) {
   }
 }
 
-TEST_F(ServerFixture, ClosesAPageThatSendsAndNeverReads) {
+TEST_F(ViewerServerTest, ClosesAPageThatSendsAndNeverReads) {
   StartServer();
   WsClient flooder(server->Port());
   flooder.Read();

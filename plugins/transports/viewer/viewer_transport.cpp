@@ -7,6 +7,7 @@
 // wall-clock second, and each camera frame's detections; encoding and sending happen on the
 // server's own thread, which also keeps only the newest message for a slow browser. So the
 // viewer costs the physics the same whether no browser, a fast one or a stalled one is connected.
+#include <atomic>
 #include <chrono>
 #include <deque>
 #include <map>
@@ -73,6 +74,8 @@ class ViewerTransport final : public ubersim::Transport {
   }
 
   void Publish(const ubersim::WorldSnapshot& snapshot) override {
+    published_step_ = snapshot.step;
+    published_time_ns_.store(snapshot.sim_time_ns, std::memory_order_relaxed);
     const auto now = SteadyClock::now();
     if (now < next_sample_) return;
     next_sample_ = now + period_;
@@ -140,9 +143,17 @@ class ViewerTransport final : public ubersim::Transport {
       }
       rate = RateSample{sample_wall_, sample_.sim_time_ns, frames_received_};
     }
-    if (rates_.empty() || rate.sim_time_ns != last_sim_time_ns_) {
-      last_sim_time_ns_ = rate.sim_time_ns;
+    // The world's own time (every step), not the sample's (every 1/rate): the last steps before
+    // a pause may fall between two samples.
+    const std::int64_t published = published_time_ns_.load(std::memory_order_relaxed);
+    if (rates_.empty() || published != last_sim_time_ns_) {
+      last_sim_time_ns_ = published;
       last_time_change_ = now;
+      refreshed_at_stop_ = false;
+    } else if (published != sample.sim_time_ns && !refreshed_at_stop_) {
+      // The world stopped after the last sample: fetch its exact state once, at once.
+      refresh_now_ = true;
+      refreshed_at_stop_ = true;
     }
     rates_.push_back(RateSample{now, rate.sim_time_ns, rate.frames});
     while (rates_.size() > 2 && now - rates_.front().wall > kRateWindow) rates_.pop_front();
@@ -178,6 +189,9 @@ class ViewerTransport final : public ubersim::Transport {
     last_refresh_ = now;
     events_->Post(ubersim::QueryEvent{ubersim::Target::Ball(), [this](const ubersim::ObjectState& s) {
       std::lock_guard lock(mutex_);
+      // Answered on the simulation thread, where Publish keeps the time of the last step.
+      sample_.step = published_step_;
+      sample_.sim_time_ns = published_time_ns_.load(std::memory_order_relaxed);
       sample_.ball_position = s.pose.position;
       sample_.ball_velocity = s.twist.linear;
     }});
@@ -215,8 +229,11 @@ class ViewerTransport final : public ubersim::Transport {
   CommandLimits limits_;
   std::string hello_;
   std::unique_ptr<ubersim::transport::RejectLog> refusals_;
-  // Simulation thread only.
+  // Simulation thread only (written by Publish, read by query replies).
   SteadyClock::time_point next_sample_{};
+  std::int64_t published_step_ = 0;
+  // Written by the simulation thread every step, read by the server thread.
+  std::atomic<std::int64_t> published_time_ns_{0};
   // Shared between the simulation thread (Publish, OnVisionFrame, query replies) and the server
   // thread (Tick, EncodeLatest).
   std::mutex mutex_;
@@ -233,6 +250,7 @@ class ViewerTransport final : public ubersim::Transport {
   SteadyClock::time_point last_refresh_{};
   std::optional<double> speed_factor_;
   bool refresh_now_ = false;
+  bool refreshed_at_stop_ = false;
   // Last: stopped (and its thread joined) before the members above are destroyed.
   std::unique_ptr<ViewerServer> server_;
 };
