@@ -5,6 +5,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -24,6 +25,7 @@
 #include "ubersim/kernel/world.hpp"
 #include "ubersim/validation/report.hpp"
 #include "ubersim/validation/scenarios.hpp"
+#include "bench.hpp"
 
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
@@ -57,6 +59,7 @@ const char* kTopHelp =
     "  validate FILE…   check model files (world, field, ball, robot) against their schemas\n"
     "  plugins          list every plugin found in the plugin search path\n"
     "  validate-physics run the physics validation scenarios, write the report and plots\n"
+    "  bench [WORLD…]   step worlds as fast as possible and measure them against bare ODE\n"
     "\n"
     "`ubersim <command> --help` describes a command's options.\n"
     "exit codes: 0 ok, 1 runtime error, 2 bad usage, 3 invalid model file, 4 plugin error,\n"
@@ -386,6 +389,118 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
   }
 }
 
+int BenchCommand(const std::vector<std::string>& args) {
+  po::options_description desc(
+      "usage: ubersim bench [WORLD…] [options]\n\n"
+      "Steps each WORLD (a file, or a shipped world's name; default: ssl-2003 div-b div-a)\n"
+      "headless and as fast as possible\n"
+      "for a fixed simulated time, every robot driving seeded random commands and the ball in\n"
+      "play, and prints per world: real-time factor, steps per second, where the time goes, peak\n"
+      "memory, and the kernel's overhead over the same bodies, joints and contacts stepped with\n"
+      "ODE alone (docs/performance.md).\n\noptions");
+  double duration = 10.0;
+  std::uint64_t seed = 1;
+  double step = 0;
+  int iterations = 0, contacts = 0;
+  std::string robot, markdown;
+  std::vector<std::string> worlds, plugin_paths;
+  desc.add_options()("help,h", "this help")
+      ("duration", po::value<double>(&duration)->default_value(duration), "simulated seconds per world")
+      ("seed", po::value<std::uint64_t>(&seed)->default_value(seed), "seed of the random play")
+      ("no-baseline", "skip the bare-ODE baseline")
+      ("physics-step", po::value<double>(&step), "override the worlds' physics step, s")
+      ("solver-iterations", po::value<int>(&iterations), "override QuickStep iterations")
+      ("max-contacts", po::value<int>(&contacts), "override contacts per geometry pair")
+      ("robot", po::value<std::string>(&robot), "put this robot model file in every robot's place")
+      ("markdown", po::value<std::string>(&markdown), "also write the results as Markdown to FILE")
+      ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
+  po::options_description hidden;
+  hidden.add_options()("world", po::value<std::vector<std::string>>(&worlds));
+  po::positional_options_description pos;
+  pos.add("world", -1);
+  po::options_description all;
+  all.add(desc).add(hidden);
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(args).options(all).positional(pos).run(), vm);
+    po::notify(vm);
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim bench: " << e.what() << "\n\n" << desc << "\n";
+    return kExitUsage;
+  }
+  if (vm.count("help")) {
+    std::cout << desc << "\n";
+    return kExitOk;
+  }
+  if (!(duration > 0) || (vm.count("physics-step") && !(step > 0 && step <= 0.02)) ||
+      (vm.count("solver-iterations") && iterations < 1) || (vm.count("max-contacts") && (contacts < 1 || contacts > 16))) {
+    std::cerr << "ubersim bench: --duration > 0, 0 < --physics-step <= 0.02, --solver-iterations >= 1, "
+                 "--max-contacts 1..16\n";
+    return kExitUsage;
+  }
+  try {
+    bench::BenchOptions options;
+    options.sim_seconds = duration;
+    options.seed = seed;
+    options.baseline = vm.count("no-baseline") == 0;
+    if (vm.count("physics-step")) options.physics_step = step;
+    if (vm.count("solver-iterations")) options.solver_iterations = iterations;
+    if (vm.count("max-contacts")) options.max_contacts = contacts;
+    if (vm.count("robot")) options.robot_model = robot;
+    if (worlds.empty()) {
+      for (const char* w : {"ssl-2003", "div-b", "div-a"}) {
+        options.worlds.push_back(DataDir() / "models" / "worlds" / (std::string(w) + ".yaml"));
+      }
+    } else {
+      // A bare name ("div-a") means the shipped world of that name.
+      for (const std::string& w : worlds) {
+        const fs::path shipped = DataDir() / "models" / "worlds" / (w + ".yaml");
+        options.worlds.push_back(!fs::exists(w) && fs::exists(shipped) ? shipped : fs::path(w));
+      }
+    }
+    std::ostringstream warnings;
+    StreamLog log(warnings, LogLevel::kWarning);
+    std::vector<fs::path> search = ToPaths(plugin_paths);
+    for (const auto& w : options.worlds) {
+      for (const auto& p : WorldPluginPaths(w)) search.push_back(p);
+    }
+    PluginRegistry registry(PluginRegistry::DefaultSearchPaths(search));
+    const ModelLoader loader(ModelLoader::DefaultSchemaDir(), LookupIn(registry));
+    const bool tty = isatty(STDERR_FILENO) != 0;
+    const auto results = bench::RunBench(options, registry, loader, log, [&](const std::string& world, double f) {
+      if (!tty) return;
+      const int width = 30;
+      const int done = static_cast<int>(f * width);
+      std::cerr << "\r" << world << " [" << std::string(done, '#') << std::string(width - done, ' ') << "] "
+                << static_cast<int>(f * 100) << " %\033[K" << std::flush;
+    });
+    if (tty) std::cerr << "\r\033[K";
+    std::string command = "ubersim bench";
+    for (const std::string& a : args) command += " " + a;
+    std::cout << bench::FormatTable(results);
+    std::cout << "machine: " << bench::MachineDescription() << "\n";
+    std::cout << "process peak resident memory: " << bench::PeakResidentMegabytes() << " MB\n";
+    if (!markdown.empty()) {
+      std::ofstream(markdown) << bench::FormatMarkdown(results, bench::MachineDescription(), command);
+      std::cout << "markdown: " << markdown << "\n";
+    }
+    if (!warnings.str().empty()) std::cerr << warnings.str();
+    return kExitOk;
+  } catch (const ModelError& e) {
+    std::cerr << "ubersim bench: invalid model: " << e.what() << "\n";
+    return kExitModel;
+  } catch (const PluginLoadError& e) {
+    std::cerr << "ubersim bench: plugin error: " << e.what() << "\n";
+    return kExitPlugin;
+  } catch (const PluginError& e) {
+    std::cerr << "ubersim bench: plugin error: " << e.what() << "\n";
+    return kExitPlugin;
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim bench: " << e.what() << "\n";
+    return kExitRuntime;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -405,6 +520,7 @@ int main(int argc, char** argv) {
   if (command == "validate") return ValidateCommand(args);
   if (command == "plugins") return PluginsCommand(args);
   if (command == "validate-physics") return ValidatePhysicsCommand(args);
+  if (command == "bench") return BenchCommand(args);
   std::cerr << "ubersim: unknown command '" << command << "'\n\n" << kTopHelp;
   return kExitUsage;
 }

@@ -107,6 +107,20 @@ TEST(Cli, RunPrintsTheViewersAddressAndNoViewerLeavesItOut) {
       << typo.output;
 }
 
+TEST(Cli, BenchPrintsEachWorldWithItsBaselineAndRefusesBadOptions) {
+  const Result r = RunUbersim("bench ssl-2003 --duration 0.05 --physics-step 0.002 --markdown " +
+                              (TempDir() / "bench.md").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("ssl-2003       10    2.00"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("machine: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("bench.md"), std::string::npos) << r.output;
+  const Result bad = RunUbersim("bench --physics-step 0.5");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  const Result missing = RunUbersim("bench no-such-world --duration 0.05");
+  EXPECT_EQ(missing.exit_code, 3) << missing.output;
+  EXPECT_NE(missing.output.find("no-such-world"), std::string::npos) << missing.output;
+}
+
 TEST(Cli, RunPrintsAStatusLineWithSimTimeAndRealTimeFactor) {
   const Result r = RunUbersim("run " + kModels + "/worlds/ssl-2003.yaml --speed 4 --duration 3");
   EXPECT_EQ(r.exit_code, 0) << r.output;

@@ -1,0 +1,277 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "bench.hpp"
+
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "bare_ode_mirror.hpp"
+
+namespace ubersim::kernel::bench {
+namespace {
+
+using SteadyClock = std::chrono::steady_clock;
+
+constexpr std::int64_t kRadioPeriodNs = 10'000'000;   // 100 Hz, as teams send
+constexpr std::int64_t kBallCheckNs = 1'500'000'000;  // keep the ball in play this often
+constexpr double kMaxSpeed = 3.0;                     // m/s
+constexpr double kBallSpeed = 6.5;                    // m/s, the rules' limit
+
+double StatusKilobytes(const char* key) {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  const std::string prefix = std::string(key) + ":";
+  while (std::getline(f, line)) {
+    if (line.rfind(prefix, 0) == 0) return std::atof(line.c_str() + prefix.size());
+  }
+  return 0.0;
+}
+
+std::string CpuModel() {
+  std::ifstream f("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      return colon == std::string::npos ? line : line.substr(colon + 2);
+    }
+  }
+  return "unknown CPU";
+}
+
+double Seconds(std::int64_t ns) { return static_cast<double>(ns) * 1e-9; }
+
+StepTimings Minus(const StepTimings& a, const StepTimings& b) {
+  return StepTimings{a.events_ns - b.events_ns,       a.plugins_ns - b.plugins_ns,
+                     a.collision_ns - b.collision_ns, a.physics_ns - b.physics_ns,
+                     a.transports_ns - b.transports_ns, a.perception_ns - b.perception_ns};
+}
+
+}  // namespace
+
+RandomPlay::RandomPlay(World& world, std::uint64_t seed) : world_(world), rng_(seed) {
+  const FieldGeometry& f = world.model().field->geometry;
+  half_length_ = 0.5 * f.field_length;
+  half_width_ = 0.5 * f.field_width;
+  for (const RobotState& r : world.Snapshot().robots) {
+    Player p;
+    p.id = r.id;
+    for (const RobotPlacement& placed : world.model().robots) {
+      if (placed.id == r.id) {
+        p.dribbler = placed.model->dribbler.has_value();
+        p.kicker = placed.model->kicker.has_value();
+      }
+    }
+    NewTarget(p, 0);
+    players_.push_back(p);
+  }
+}
+
+void RandomPlay::NewTarget(Player& p, std::int64_t now_ns) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_real_distribution<double> speed(0.5, kMaxSpeed);
+  std::uniform_int_distribution<std::int64_t> hold(500'000'000, 2'000'000'000);
+  p.target_x = unit(rng_) * (half_length_ - 0.2);
+  p.target_y = unit(rng_) * (half_width_ - 0.2);
+  p.speed = speed(rng_);
+  p.turn = unit(rng_) * 4.0;
+  p.next_target_ns = now_ns + hold(rng_);
+}
+
+void RandomPlay::BeforeStep() {
+  const std::int64_t now = world_.clock().time_ns();
+  if (now < next_radio_ns_ && now < next_ball_ns_) return;
+  const WorldSnapshot s = world_.Snapshot();
+  if (now >= next_radio_ns_) {
+    next_radio_ns_ = now + kRadioPeriodNs;
+    std::bernoulli_distribution kick(0.02);
+    for (std::size_t i = 0; i < players_.size() && i < s.robots.size(); ++i) {
+      Player& p = players_[i];
+      if (now >= p.next_target_ns) NewTarget(p, now);
+      const Vec3 at = s.robots[i].pose.position;
+      const Vec3 to(p.target_x - at.x(), p.target_y - at.y(), 0.0);
+      const double distance = to.norm();
+      // Slow down over the last half metre, as a path controller would.
+      const double v = distance > 1e-6 ? std::min(p.speed, 2.0 * distance) / distance : 0.0;
+      CommandEvent c;
+      c.robot = p.id;
+      c.move = GlobalVelocityCommand{to.x() * v, to.y() * v, p.turn};
+      if (p.dribbler) c.dribbler_speed = 100.0;
+      if (p.kicker && kick(rng_)) c.kick = KickCommand{4.0, 0.0};
+      world_.events().Post(c);
+    }
+  }
+  if (now >= next_ball_ns_) {
+    next_ball_ns_ = now + kBallCheckNs;
+    const Vec3 ball = s.ball.pose.position;
+    const bool outside = std::abs(ball.x()) > half_length_ || std::abs(ball.y()) > half_width_;
+    if (outside || s.ball.twist.linear.norm() < 0.5) {
+      std::uniform_real_distribution<double> unit(-1.0, 1.0);
+      std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+      PositionEvent e;
+      e.target = Target::Ball();
+      if (outside) e.position = Vec3(unit(rng_) * half_length_ * 0.8, unit(rng_) * half_width_ * 0.8, 0.0);
+      const double a = angle(rng_);
+      e.velocity = Vec3(kBallSpeed * std::cos(a), kBallSpeed * std::sin(a), 0.0);
+      world_.events().Post(e);
+    }
+  }
+}
+
+double ResidentMegabytes() { return StatusKilobytes("VmRSS") / 1024.0; }
+double PeakResidentMegabytes() { return StatusKilobytes("VmHWM") / 1024.0; }
+
+std::string MachineDescription() {
+  std::ostringstream out;
+  utsname u{};
+  uname(&u);
+  out << CpuModel() << ", " << sysconf(_SC_NPROCESSORS_ONLN) << " cores online; " << u.sysname << " "
+      << u.release << "; compiler " << __VERSION__;
+#ifdef NDEBUG
+  out << ", optimised build";
+#else
+  out << ", debug build (assertions on)";
+#endif
+  out << "; ODE configuration: " << dGetConfiguration();
+  return out.str();
+}
+
+std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& registry,
+                                  const ModelLoader& loader, Log& log,
+                                  const std::function<void(const std::string&, double)>& progress) {
+  std::vector<BenchResult> results;
+  for (const auto& file : options.worlds) {
+    WorldModel model = loader.LoadWorld(file);
+    if (options.physics_step) model.physics.step = *options.physics_step;
+    if (options.solver_iterations) model.physics.solver_iterations = *options.solver_iterations;
+    if (options.max_contacts) model.physics.max_contacts = *options.max_contacts;
+    if (options.robot_model) {
+      const auto robot = loader.LoadRobot(*options.robot_model);
+      for (RobotPlacement& p : model.robots) p.model = robot;
+    }
+    model.transports.clear();  // headless: no sockets, nothing waits on a network
+
+    BenchResult r;
+    r.world = model.name;
+    r.file = file.string();
+    r.robots = static_cast<int>(model.robots.size());
+    r.physics_step = model.physics.step;
+    r.solver_iterations = model.physics.solver_iterations;
+    r.max_contacts = model.physics.max_contacts;
+    r.rss_before_mb = ResidentMegabytes();
+
+    World world(model, registry, log, /*start_transports=*/false);
+    std::unique_ptr<BareOdeMirror> mirror;
+    if (options.baseline) mirror = std::make_unique<BareOdeMirror>(world, options.seed);
+    if (mirror) {
+      r.bodies = mirror->bodies();
+      r.geoms = mirror->geoms();
+      r.joints = mirror->joints();
+    }
+    RandomPlay play(world, options.seed);
+    const auto steps = static_cast<std::int64_t>(std::llround(options.sim_seconds / world.clock().step_seconds()));
+    const std::int64_t report_every = std::max<std::int64_t>(1, steps / 50);
+    double peak = ResidentMegabytes();
+
+    const StepTimings before = world.timings();
+    const auto t0 = SteadyClock::now();
+    for (std::int64_t i = 0; i < steps; ++i) {
+      play.BeforeStep();
+      world.Step();
+      if (i % report_every == 0) {
+        peak = std::max(peak, ResidentMegabytes());
+        if (progress) progress(r.world, 0.5 * static_cast<double>(i) / static_cast<double>(steps));
+      }
+    }
+    r.wall_seconds = std::chrono::duration<double>(SteadyClock::now() - t0).count();
+    const StepTimings t = Minus(world.timings(), before);
+    r.sim_seconds = world.clock().seconds();
+    r.real_time_factor = r.sim_seconds / r.wall_seconds;
+    r.steps_per_second = static_cast<double>(steps) / r.wall_seconds;
+    r.step_microseconds = 1e6 * r.wall_seconds / static_cast<double>(steps);
+    r.split.collision = Seconds(t.collision_ns) / r.wall_seconds;
+    r.split.physics = Seconds(t.physics_ns) / r.wall_seconds;
+    r.split.plugins = Seconds(t.plugins_ns) / r.wall_seconds;
+    r.split.perception = Seconds(t.perception_ns) / r.wall_seconds;
+    r.split.transports = Seconds(t.transports_ns) / r.wall_seconds;
+    r.split.events = Seconds(t.events_ns) / r.wall_seconds;
+    r.split.other = std::max(0.0, 1.0 - r.split.collision - r.split.physics - r.split.plugins -
+                                      r.split.perception - r.split.transports - r.split.events);
+    r.rss_peak_mb = std::max(peak, ResidentMegabytes());
+
+    if (mirror) {
+      const auto b0 = SteadyClock::now();
+      for (std::int64_t i = 0; i < steps; ++i) {
+        mirror->Step();
+        if (progress && i % report_every == 0) {
+          progress(r.world, 0.5 + 0.5 * static_cast<double>(i) / static_cast<double>(steps));
+        }
+      }
+      r.baseline = true;
+      r.baseline_wall_seconds = std::chrono::duration<double>(SteadyClock::now() - b0).count();
+      r.baseline_real_time_factor = r.sim_seconds / r.baseline_wall_seconds;
+      r.kernel_overhead = r.wall_seconds / r.baseline_wall_seconds - 1.0;
+    }
+    if (progress) progress(r.world, 1.0);
+    results.push_back(r);
+  }
+  return results;
+}
+
+std::string FormatTable(const std::vector<BenchResult>& results) {
+  std::ostringstream out;
+  char line[512];
+  std::snprintf(line, sizeof line, "%-10s %6s %7s %5s %9s %10s %8s | %6s %6s %6s %6s %6s %6s | %8s | %9s %9s\n",
+                "world", "robots", "step ms", "iter", "real-time", "steps/s", "µs/step", "coll", "ode",
+                "plugin", "percep", "events", "other", "peak MB", "bare ODE", "overhead");
+  out << line;
+  for (const BenchResult& r : results) {
+    char baseline[64] = "-";
+    char overhead[64] = "-";
+    if (r.baseline) {
+      std::snprintf(baseline, sizeof baseline, "%.1f×", r.baseline_real_time_factor);
+      std::snprintf(overhead, sizeof overhead, "%+.1f %%", 100.0 * r.kernel_overhead);
+    }
+    std::snprintf(line, sizeof line,
+                  "%-10s %6d %7.2f %5d %8.1f× %10.0f %8.1f | %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% | %8.1f | %9s %9s\n",
+                  r.world.c_str(), r.robots, r.physics_step * 1e3, r.solver_iterations, r.real_time_factor,
+                  r.steps_per_second, r.step_microseconds, 100 * r.split.collision, 100 * r.split.physics,
+                  100 * r.split.plugins, 100 * r.split.perception, 100 * r.split.events, 100 * r.split.other,
+                  r.rss_peak_mb, baseline, overhead);
+    out << line;
+  }
+  return out.str();
+}
+
+std::string FormatMarkdown(const std::vector<BenchResult>& results, const std::string& machine,
+                           const std::string& command) {
+  std::ostringstream out;
+  out << "Machine: " << machine << "\n\nCommand: `" << command << "`\n\n";
+  out << "| world | robots | bodies / geoms / joints | step | iterations | contacts per pair | real-time factor | steps/s | collision | ODE step | plugins | perception | events | other | peak memory | bare ODE | kernel overhead |\n";
+  out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  char line[1024];
+  for (const BenchResult& r : results) {
+    char baseline[64] = "-";
+    char overhead[64] = "-";
+    if (r.baseline) {
+      std::snprintf(baseline, sizeof baseline, "%.1f×", r.baseline_real_time_factor);
+      std::snprintf(overhead, sizeof overhead, "%+.0f %%", 100.0 * r.kernel_overhead);
+    }
+    std::snprintf(line, sizeof line,
+                  "| %s | %d | %d / %d / %d | %.2f ms | %d | %d | **%.1f×** | %.0f | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.1f MB | %s | %s |\n",
+                  r.world.c_str(), r.robots, r.bodies, r.geoms, r.joints, r.physics_step * 1e3, r.solver_iterations,
+                  r.max_contacts, r.real_time_factor, r.steps_per_second, 100 * r.split.collision,
+                  100 * r.split.physics, 100 * r.split.plugins, 100 * r.split.perception, 100 * r.split.events,
+                  100 * r.split.other, r.rss_peak_mb, baseline, overhead);
+    out << line;
+  }
+  return out.str();
+}
+
+}  // namespace ubersim::kernel::bench

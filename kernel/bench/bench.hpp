@@ -1,0 +1,108 @@
+// SPDX-License-Identifier: Apache-2.0
+// `ubersim bench`: steps worlds headless as fast as possible under seeded random play and
+// measures real-time factor, steps per second, where the time goes, memory, and the kernel's
+// overhead over the same model stepped with ODE alone (bare_ode_mirror.hpp).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "ubersim/kernel/logging.hpp"
+#include "ubersim/kernel/model.hpp"
+#include "ubersim/kernel/plugin_registry.hpp"
+#include "ubersim/kernel/world.hpp"
+
+namespace ubersim::kernel::bench {
+
+/// What to run.
+struct BenchOptions {
+  std::vector<std::filesystem::path> worlds;   ///< world files, run in this order
+  double sim_seconds = 10.0;                   ///< simulated time per world, s
+  std::uint64_t seed = 1;                      ///< random play and baseline commands
+  bool baseline = true;                        ///< also step the bare-ODE baseline
+  std::optional<double> physics_step;          ///< override the worlds' physics step, s
+  std::optional<int> solver_iterations;        ///< override QuickStep iterations
+  std::optional<int> max_contacts;             ///< override contacts per geometry pair
+  std::optional<std::string> robot_model;      ///< replace every robot's model file
+};
+
+/// Shares of the kernel's wall time, 0..1.
+struct TimeSplit {
+  double collision = 0, physics = 0, plugins = 0, perception = 0, transports = 0, events = 0;
+  double other = 0;  ///< the rest: snapshots for the cameras, the random play, the loop
+};
+
+/// One world's figures.
+struct BenchResult {
+  std::string world;           ///< world name
+  std::string file;            ///< world file
+  int robots = 0;              ///< robots on the field
+  double physics_step = 0;     ///< s
+  int solver_iterations = 0;   ///< QuickStep iterations
+  int max_contacts = 0;        ///< contacts per geometry pair
+  double sim_seconds = 0;      ///< simulated
+  double wall_seconds = 0;     ///< spent stepping
+  double real_time_factor = 0; ///< sim_seconds / wall_seconds
+  double steps_per_second = 0; ///< physics steps per wall second
+  double step_microseconds = 0;  ///< wall time per step, µs
+  TimeSplit split;             ///< where the time went
+  double rss_before_mb = 0;    ///< resident memory before building the world, MB
+  double rss_peak_mb = 0;      ///< highest resident memory seen while it ran, MB
+  int bodies = 0, geoms = 0, joints = 0;  ///< ODE objects of the model (from the baseline copy)
+  bool baseline = false;       ///< the baseline ran
+  double baseline_wall_seconds = 0;       ///< bare ODE, same steps
+  double baseline_real_time_factor = 0;   ///< bare ODE
+  double kernel_overhead = 0;  ///< kernel wall / baseline wall − 1
+};
+
+/// Drives every robot of a world with seeded random commands (waypoints across the field at up
+/// to 3 m/s, turning, dribbling, kicking) at a 100 Hz radio rate, and keeps the ball in play:
+/// the same events a team's software sends, through the same kernel paths.
+class RandomPlay {
+ public:
+  /// Plays in `world` with this seed.
+  RandomPlay(World& world, std::uint64_t seed);
+  /// Posts the commands due before the next step.
+  void BeforeStep();
+
+ private:
+  struct Player {
+    RobotId id;
+    bool dribbler = false, kicker = false;
+    double target_x = 0, target_y = 0, speed = 1, turn = 0;
+    std::int64_t next_target_ns = 0;
+  };
+  void NewTarget(Player& p, std::int64_t now_ns);
+
+  World& world_;
+  std::mt19937_64 rng_;
+  std::vector<Player> players_;
+  double half_length_ = 4.5, half_width_ = 3.0;
+  std::int64_t next_radio_ns_ = 0;
+  std::int64_t next_ball_ns_ = 0;
+};
+
+/// The machine and build the figures came from (CPU, cores, OS, compiler, ODE).
+std::string MachineDescription();
+
+/// Resident memory now and at its peak, MB (from /proc/self/status; 0 where unavailable).
+double ResidentMegabytes();
+double PeakResidentMegabytes();  ///< the process's peak resident memory, MB
+
+/// Runs each world for options.sim_seconds; `progress(world, fraction)` is called now and then.
+std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& registry,
+                                  const ModelLoader& loader, Log& log,
+                                  const std::function<void(const std::string&, double)>& progress);
+
+/// The results as a plain-text table (terminal).
+std::string FormatTable(const std::vector<BenchResult>& results);
+/// The results as Markdown, with the machine and the command (docs/performance.md).
+std::string FormatMarkdown(const std::vector<BenchResult>& results, const std::string& machine,
+                           const std::string& command);
+
+}  // namespace ubersim::kernel::bench
