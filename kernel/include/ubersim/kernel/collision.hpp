@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -48,7 +49,17 @@ class MaterialTable {
   std::size_t size() const { return pairs_.size(); }
 
  private:
-  std::map<std::pair<std::string, std::string>, SurfaceMaterial> pairs_;
+  // Compares (name, name) pairs of strings or string views alike, so a lookup copies no string
+  // (it runs for every touching pair of every step).
+  struct NamePairLess {
+    using is_transparent = void;
+    template <class A, class B>
+    bool operator()(const A& x, const B& y) const {
+      const std::string_view x1 = x.first, x2 = x.second, y1 = y.first, y2 = y.second;
+      return x1 < y1 || (x1 == y1 && x2 < y2);
+    }
+  };
+  std::map<std::pair<std::string, std::string>, SurfaceMaterial, NamePairLess> pairs_;
 };
 
 /// Counters of the last Collide() call.
