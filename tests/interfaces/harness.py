@@ -266,6 +266,21 @@ class MulticastReceiver:
             if predicate(item):
                 return item
 
+    def collect_until(self, done, timeout, parse=None):
+        """Every datagram as (monotonic arrival time, item) until `done(items)` is true, checked
+        after each datagram (returned), or `timeout` s pass (AssertionError). For windows measured
+        in simulated time: a starved machine makes the simulator fall behind the wall clock."""
+        out = []
+        deadline = time.monotonic() + timeout
+        while not done(out):
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise AssertionError(f"collected {len(out)} datagrams in {timeout} s, not enough")
+            data = self.recv(left)
+            if data is not None:
+                out.append((time.monotonic(), parse(data) if parse else data))
+        return out
+
     def collect(self, duration, parse=None):
         """Every datagram received during `duration` s, as (monotonic arrival time, item)."""
         out = []
