@@ -3,6 +3,9 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <optional>
+#include <algorithm>
+#include <map>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
@@ -25,6 +28,7 @@
 #include "ubersim/kernel/world.hpp"
 #include "ubersim/validation/report.hpp"
 #include "ubersim/validation/scenarios.hpp"
+#include "batch.hpp"
 #include "bench.hpp"
 
 namespace po = boost::program_options;
@@ -60,6 +64,7 @@ const char* kTopHelp =
     "  plugins          list every plugin found in the plugin search path\n"
     "  validate-physics run the physics validation scenarios, write the report and plots\n"
     "  bench [WORLD…]   step worlds as fast as possible and measure them against bare ODE\n"
+    "  batch [WORLD…]   run many seeded worlds at once on worker processes\n"
     "\n"
     "`ubersim <command> --help` describes a command's options.\n"
     "exit codes: 0 ok, 1 runtime error, 2 bad usage, 3 invalid model file, 4 plugin error,\n"
@@ -501,6 +506,174 @@ int BenchCommand(const std::vector<std::string>& args) {
   }
 }
 
+// One line that redraws itself on a terminal: a bar, jobs done, percent, time left.
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool tty) : tty_(tty), start_(std::chrono::steady_clock::now()) {}
+  void Update(const std::string& what, std::size_t done, std::size_t total, double fraction) {
+    if (!tty_) return;
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const int width = 30;
+    const int filled = std::clamp(static_cast<int>(fraction * width), 0, width);
+    char eta[32] = "";
+    if (fraction > 0.02 && fraction < 1.0) std::snprintf(eta, sizeof eta, ", %.0f s left", elapsed * (1.0 / fraction - 1.0));
+    std::fprintf(stderr, "\r%s [%s%s] %zu/%zu worlds, %3.0f %%%s\033[K", what.c_str(), std::string(filled, '#').c_str(),
+                 std::string(width - filled, ' ').c_str(), done, total, fraction * 100.0, eta);
+    std::fflush(stderr);
+  }
+  void Clear() {
+    if (tty_) std::fprintf(stderr, "\r\033[K");
+  }
+
+ private:
+  bool tty_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+int BatchCommand(const std::vector<std::string>& args) {
+  po::options_description desc(
+      "usage: ubersim batch [WORLD…] [options]\n\n"
+      "Runs COUNT copies of each WORLD (a file or a shipped world's name; default div-b), each\n"
+      "with its own seed (random play, noise), headless and as fast as possible, spread over\n"
+      "WORKERS processes; prints each world's figures and final state hash (the same seed gives\n"
+      "the same hash, whatever the number of workers) and the total throughput.\n\noptions");
+  int count = 4, workers = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
+  double duration = 10.0, step = 0;
+  int iterations = 0;
+  std::uint64_t seed = 1;
+  std::string robot;
+  std::vector<std::string> worlds, plugin_paths;
+  desc.add_options()("help,h", "this help")
+      ("count", po::value<int>(&count)->default_value(count), "copies of each world (seeds SEED, SEED+1, …)")
+      ("workers", po::value<int>(&workers)->default_value(workers), "worker processes (default: the cores)")
+      ("duration", po::value<double>(&duration)->default_value(duration), "simulated seconds per world")
+      ("seed", po::value<std::uint64_t>(&seed)->default_value(seed), "first seed")
+      ("physics-step", po::value<double>(&step), "override the worlds' physics step, s")
+      ("solver-iterations", po::value<int>(&iterations), "override QuickStep iterations")
+      ("robot", po::value<std::string>(&robot), "put this robot model file in every robot's place")
+      ("scaling", "run once on 1 worker, then on WORKERS, and print the speed-up (and check the hashes agree)")
+      ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
+  po::options_description hidden;
+  hidden.add_options()("world", po::value<std::vector<std::string>>(&worlds));
+  po::positional_options_description pos;
+  pos.add("world", -1);
+  po::options_description all;
+  all.add(desc).add(hidden);
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(args).options(all).positional(pos).run(), vm);
+    po::notify(vm);
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim batch: " << e.what() << "\n\n" << desc << "\n";
+    return kExitUsage;
+  }
+  if (vm.count("help")) {
+    std::cout << desc << "\n";
+    return kExitOk;
+  }
+  if (count < 1 || workers < 1 || !(duration > 0) || (vm.count("physics-step") && !(step > 0 && step <= 0.02)) ||
+      (vm.count("solver-iterations") && iterations < 1)) {
+    std::cerr << "ubersim batch: --count >= 1, --workers >= 1, --duration > 0, 0 < --physics-step <= 0.02, "
+                 "--solver-iterations >= 1\n";
+    return kExitUsage;
+  }
+  if (worlds.empty()) worlds.push_back("div-b");
+  try {
+    std::vector<fs::path> files;
+    for (const std::string& w : worlds) {
+      const fs::path shipped = DataDir() / "models" / "worlds" / (w + ".yaml");
+      files.push_back(!fs::exists(w) && fs::exists(shipped) ? shipped : fs::path(w));
+    }
+    std::vector<fs::path> search = ToPaths(plugin_paths);
+    for (const auto& f : files) {
+      for (const auto& p : WorldPluginPaths(f)) search.push_back(p);
+    }
+    PluginRegistry registry(PluginRegistry::DefaultSearchPaths(search));
+    const ModelLoader loader(ModelLoader::DefaultSchemaDir(), LookupIn(registry));
+    // Load every model here first: a broken file is reported once, before any worker starts.
+    std::vector<WorldModel> models;
+    for (const auto& f : files) {
+      WorldModel m = loader.LoadWorld(f);
+      m.transports.clear();
+      if (vm.count("physics-step")) m.physics.step = step;
+      if (vm.count("solver-iterations")) m.physics.solver_iterations = iterations;
+      if (vm.count("robot")) {
+        const auto r = loader.LoadRobot(robot);
+        for (RobotPlacement& p : m.robots) p.model = r;
+      }
+      models.push_back(std::move(m));
+    }
+    batch::BatchOptions options;
+    options.sim_seconds = duration;
+    options.workers = workers;
+    std::map<std::string, std::size_t> model_of;
+    for (std::size_t w = 0; w < files.size(); ++w) {
+      model_of[files[w].string()] = w;
+      for (int k = 0; k < count; ++k) {
+        options.jobs.push_back(batch::BatchJob{files[w], seed + static_cast<std::uint64_t>(options.jobs.size())});
+      }
+    }
+    std::ostringstream warnings;
+    StreamLog log(warnings, LogLevel::kError);
+    const batch::WorldFactory factory = [&](const batch::BatchJob& job) {
+      WorldModel m = models.at(model_of.at(job.world.string()));
+      m.seed = job.seed;
+      return std::make_unique<World>(m, registry, log, /*start_transports=*/false);
+    };
+    const bool tty = isatty(STDERR_FILENO) != 0;
+    auto run = [&](int n) {
+      options.workers = n;
+      ProgressBar bar(tty);
+      const std::string label = std::to_string(n) + (n == 1 ? " worker " : " workers");
+      batch::BatchSummary s = batch::RunBatch(options, factory, [&](std::size_t done, std::size_t total, double f) {
+        bar.Update(label, done, total, f);
+      });
+      bar.Clear();
+      return s;
+    };
+    std::optional<batch::BatchSummary> single;
+    if (vm.count("scaling")) single = run(1);
+    const batch::BatchSummary summary = run(workers);
+
+    std::printf("%4s %-10s %6s %8s %8s %10s  %s\n", "job", "world", "seed", "sim s", "wall s", "real-time", "state hash");
+    for (const batch::BatchJobResult& j : summary.jobs) {
+      if (!j.error.empty()) {
+        std::printf("%4zu %-10s %6llu  FAILED: %s\n", j.index, j.world.c_str(), static_cast<unsigned long long>(j.seed),
+                    j.error.c_str());
+        continue;
+      }
+      std::printf("%4zu %-10s %6llu %8.2f %8.2f %9.1f×  %016llx\n", j.index, j.world.c_str(),
+                  static_cast<unsigned long long>(j.seed), j.sim_seconds, j.wall_seconds, j.sim_seconds / j.wall_seconds,
+                  static_cast<unsigned long long>(j.state_hash));
+    }
+    std::printf("%zu worlds on %d worker process%s: %.1f simulated s in %.2f wall s, throughput %.1f× real time\n",
+                summary.jobs.size(), summary.workers, summary.workers == 1 ? "" : "es", summary.sim_seconds,
+                summary.wall_seconds, summary.Throughput());
+    int status = summary.Failed() ? kExitRuntime : kExitOk;
+    if (single) {
+      std::printf("1 worker: throughput %.1f× real time; %d workers: %.1f×; speed-up %.2f\n", single->Throughput(),
+                  summary.workers, summary.Throughput(), summary.Throughput() / single->Throughput());
+      for (std::size_t i = 0; i < summary.jobs.size(); ++i) {
+        if (summary.jobs[i].state_hash != single->jobs[i].state_hash) {
+          std::printf("job %zu: state hash differs between 1 and %d workers: not deterministic\n", i, summary.workers);
+          status = kExitRuntime;
+        }
+      }
+    }
+    if (summary.Failed()) std::cerr << "ubersim batch: " << summary.Failed() << " worlds failed\n";
+    return status;
+  } catch (const ModelError& e) {
+    std::cerr << "ubersim batch: invalid model: " << e.what() << "\n";
+    return kExitModel;
+  } catch (const PluginLoadError& e) {
+    std::cerr << "ubersim batch: plugin error: " << e.what() << "\n";
+    return kExitPlugin;
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim batch: " << e.what() << "\n";
+    return kExitRuntime;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -521,6 +694,7 @@ int main(int argc, char** argv) {
   if (command == "plugins") return PluginsCommand(args);
   if (command == "validate-physics") return ValidatePhysicsCommand(args);
   if (command == "bench") return BenchCommand(args);
+  if (command == "batch") return BatchCommand(args);
   std::cerr << "ubersim: unknown command '" << command << "'\n\n" << kTopHelp;
   return kExitUsage;
 }

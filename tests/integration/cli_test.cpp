@@ -121,6 +121,16 @@ TEST(Cli, BenchPrintsEachWorldWithItsBaselineAndRefusesBadOptions) {
   EXPECT_NE(missing.output.find("no-such-world"), std::string::npos) << missing.output;
 }
 
+TEST(Cli, BatchRunsSeededWorldsOnWorkersAndChecksTheirHashesAgree) {
+  const Result r = RunUbersim("batch ssl-2003 --count 2 --workers 2 --duration 0.2 --physics-step 0.002 --scaling");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("2 worlds on 2 worker processes"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("speed-up"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("not deterministic"), std::string::npos) << r.output;
+  const Result bad = RunUbersim("batch --workers 0");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+}
+
 TEST(Cli, RunPrintsAStatusLineWithSimTimeAndRealTimeFactor) {
   const Result r = RunUbersim("run " + kModels + "/worlds/ssl-2003.yaml --speed 4 --duration 3");
   EXPECT_EQ(r.exit_code, 0) << r.output;
