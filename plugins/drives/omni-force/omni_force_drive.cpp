@@ -45,6 +45,14 @@ struct Wheel {
 // of a micrometre and drops out of ODE's contact list at the slightest pitch, and one wheel
 // missing for a step would yaw the robot.
 constexpr double kGripHeight = 0.002;
+// How far a wheel-body robot settles into the carpet, m: ODE lets a resting contact sink through
+// the world's contact layer (contact_surface_layer: 0.5 mm by default and in every shipped world)
+// before pushing back, and the omni drive's wheel contacts drift down through it within seconds
+// (the robot comes to rest 0.5 mm low). The one-body robot's four supports on one rigid body
+// would creep through it at a micrometre a second, so they are placed this much higher: the
+// robot drops into the same place in its first 10 ms. The dribbler's reach into the ball is
+// tuned to that height (a rigid robot 0.5 mm high does not draw in a ball 2 mm off its face).
+constexpr double kSettle = 0.0005;
 // Largest yaw gain of the wheel servos (1 reaches the target in one step, 2 oscillates forever).
 constexpr double kMaxYawGain = 1.8;
 
@@ -97,13 +105,13 @@ class OmniForceDrive final : public ubersim::Drive {
       w.mu_roll = surface.mu2;
       // The support: a sphere of the wheel's radius at its centre touches the carpet at one point
       // under the axle, as AddDrivenWheel's carpet contact does, so the robot stands as high as on
-      // wheels. It pokes out of the shell (0.079 + 0.029 m > 0.09 m), so it keeps only its
+      // wheels (kSettle above it: see there). It pokes out of the shell (0.079 + 0.029 m > 0.09 m), so it keeps only its
       // carpet contacts; the ball, walls and robots meet the chassis shell, as they would meet
       // the shell around real wheels.
       ubersim::GeomSpec support;
       support.name = "wheel" + std::to_string(i);
       support.shape = ubersim::Shape::Sphere(wheel_radius_);
-      support.offset.position = w.centre;
+      support.offset.position = w.centre + Vec3(0, 0, kSettle);
       support.material = surface;
       ubersim::Geom& geom = ctx.Node().AddGeom(support, &chassis);
       ctx.ObserveContacts(geom, [this, i](const ubersim::Contact& c, ubersim::SurfaceMaterial& s, bool& accept) {
