@@ -5,13 +5,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "scenario_world.hpp"
 
 namespace ubersim::validation::detail {
 namespace {
 
-constexpr const char* kRobotFile = "robots/ssl-omni-2026.yaml";
 constexpr double kRadioPeriod = 0.01;  // s: a 100 Hz radio
 
 struct PartsBench {
@@ -66,8 +66,8 @@ struct PartsBench {
 };
 
 // The robot alone on the Div B field at (-2, 0) facing +x, the ball resting against its front.
-kernel::WorldModel RobotWithBall(const Environment& env) {
-  kernel::WorldModel w = OneRobotWorld(env, "worlds/div-b.yaml", kRobotFile, -2.0, 0.0, 0.0);
+kernel::WorldModel RobotWithBall(const Environment& env, const std::string& robot_file) {
+  kernel::WorldModel w = OneRobotWorld(env, "worlds/div-b.yaml", robot_file, -2.0, 0.0, 0.0);
   const double front = w.robots.front().model->body.front_distance;
   w.ball_start = Vec3(-2.0 + front + w.ball->radius + 0.002, 0.0, 0.0);
   return w;
@@ -79,22 +79,23 @@ double KickerParam(const kernel::RobotModel& r, const char* key, double fallback
 
 }  // namespace
 
-ScenarioResult KickerSpeeds(const Environment& env) {
+ScenarioResult KickerSpeeds(const Environment& env, const std::string& robot_file, const std::string& id) {
   ScenarioResult r;
-  r.id = "kicker_speeds";
-  r.title = "Kicker: flat kicks clamped to the rules' limit, chips at the kicker's angle";
-  r.setup = "The modern robot (models/robots/ssl-omni-2026.yaml, solenoid kicker: flat limit 6.5 m/s, "
+  r.id = id;
+  r.title = "Kicker: flat kicks clamped to the rules' limit, chips at the kicker's angle" +
+            (robot_file == kPartsRobot ? std::string() : " (" + robot_file + ")");
+  r.setup = "The modern robot (models/" + robot_file + ", solenoid kicker: flat limit 6.5 m/s, "
             "the rules' ball-speed limit) stands with the ball resting against its front. A flat kick is "
             "commanded at 10 m/s; the ball's speed as it leaves is the largest in the next 50 ms. Then, "
             "with the ball put back, a chip is commanded at 3 m/s: its speed and elevation as it leaves.";
   {
-    PartsBench p(env, RobotWithBall(env));
+    PartsBench p(env, RobotWithBall(env, robot_file));
     p.Drive(LocalVelocityCommand{}, 0.0, 0.3, [] {});  // the ball settles against the front
     r.metrics.push_back(Band("flat_kick_commanded_10", p.Kick(KickCommand{10.0, 0.0}), "m/s", 6.4, 6.6,
                              "issue: 10 m/s commanded leaves at 6.5 ± 0.1 m/s"));
   }
   {
-    PartsBench p(env, RobotWithBall(env));
+    PartsBench p(env, RobotWithBall(env, robot_file));
     p.Drive(LocalVelocityCommand{}, 0.0, 0.3, [] {});
     Vec3 v = Vec3::Zero();
     const double speed = p.Kick(KickCommand{3.0, M_PI / 4}, &v);
@@ -107,19 +108,21 @@ ScenarioResult KickerSpeeds(const Environment& env) {
   return r;
 }
 
-ScenarioResult DribblerHold(const Environment& env) {
+ScenarioResult DribblerHold(const Environment& env, const std::string& robot_file, const std::string& id) {
   constexpr double kDribble = 150.0;  // rad/s: full speed of the modern robot's roller
   ScenarioResult r;
-  r.id = "dribbler_hold";
-  r.title = "Dribbler: holds the ball driving and turning, loses it spinning fast";
-  r.setup = "The modern robot with its roller dribbler at 150 rad/s and the ball against its front "
+  r.id = id;
+  r.title = "Dribbler: holds the ball driving and turning, loses it spinning fast" +
+            (robot_file == kPartsRobot ? std::string() : " (" + robot_file + ")");
+  r.setup = "The modern robot" + (robot_file == kPartsRobot ? std::string() : " (models/" + robot_file + ")") +
+            " with its roller dribbler at 150 rad/s and the ball against its front "
             "drives 1 m forward at 1 m/s (3 m/s² limits), stops, and turns 90° at 2 rad/s, the ball held "
             "through contact friction alone (no glue, no forces on the ball). Every step the ball must sit "
             "in the mouth: against the flat front, within 4 cm of the centre line. Then it kicks at 10 m/s "
             "while dribbling. A second run spins at 8 rad/s, where the ball must get away.";
   std::vector<double> t, gap;
   {
-    PartsBench p(env, RobotWithBall(env));
+    PartsBench p(env, RobotWithBall(env, robot_file));
     int steps = 0, held = 0;
     double worst_offset = 0;
     const double mouth = p.robot.body.front_distance + p.ball_radius;
@@ -156,7 +159,7 @@ ScenarioResult DribblerHold(const Environment& env) {
                              "issue: a kick while dribbling still leaves at the clamped speed"));
   }
   {
-    PartsBench p(env, RobotWithBall(env));
+    PartsBench p(env, RobotWithBall(env, robot_file));
     p.Drive(LocalVelocityCommand{}, kDribble, 0.3, [] {});
     bool lost = false;
     p.Drive(LocalVelocityCommand{0, 0, 8.0}, kDribble, 1.0, [&] { lost = lost || !p.Held(); });
@@ -164,8 +167,10 @@ ScenarioResult DribblerHold(const Environment& env) {
                              "issue: loses it when it turns too fast"));
   }
   Plot plot;
-  plot.file = "dribbler-hold.svg";
-  plot.title = "Dribbling: the ball's distance from the roller, 1 m drive then 90° turn";
+  plot.file = id + ".svg";
+  std::replace(plot.file.begin(), plot.file.end(), '_', '-');
+  plot.title = "Dribbling: the ball's distance from the roller, 1 m drive then 90° turn" +
+               (robot_file == kPartsRobot ? std::string() : " (" + robot_file + ")");
   plot.x_label = "time (s)";
   plot.y_label = "ball ahead of its resting place (mm)";
   plot.series = {Series{"ÜberSim", t, gap, false}};

@@ -3,14 +3,14 @@
 // 100 Hz radio rate, ground truth read back.
 #include "robot_scenarios.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "scenario_world.hpp"
 
 namespace ubersim::validation::detail {
 namespace {
-
-constexpr const char* kOmniRobot = "robots/ssl-omni-2026.yaml";
 
 // One robot alone on a field at (-2, 0), the ball in a far corner out of the way.
 kernel::WorldModel OneRobot(const Environment& env, const std::string& world, const std::string& robot_file) {
@@ -22,20 +22,30 @@ kernel::WorldModel OneRobot(const Environment& env, const std::string& world, co
 
 Vec3 LocalVelocity(const RobotState& r) { return r.pose.orientation.conjugate() * r.twist.linear; }
 
+bool IsWheelBody(const OmniModel& m) { return std::string(m.drive) == kWheelBodyOmni.drive; }
+// "Omni robot" for the wheel-body robot, "Omni robot, omni_force drive" for another drive.
+std::string RobotName(const OmniModel& m) {
+  return IsWheelBody(m) ? "Omni robot" : std::string("Omni robot, ") + m.drive + " drive";
+}
+// The model file and, for another drive, its name.
+std::string Which(const OmniModel& m) {
+  return std::string("models/") + m.file + (IsWheelBody(m) ? "" : std::string(", the ") + m.drive + " drive");
+}
+
 }  // namespace
 
-ScenarioResult OmniSteadyVelocity(const Environment& env) {
+ScenarioResult OmniSteadyVelocity(const Environment& env, const OmniModel& model) {
   ScenarioResult r;
-  r.id = "omni_steady_velocity";
-  r.title = "Omni robot: steady speed follows the command";
-  r.setup = "The modern four-wheel robot (models/robots/ssl-omni-2026.yaml: wheels at 60°, 135°, 225°, "
+  r.id = std::string(model.drive) + "_steady_velocity";
+  r.title = RobotName(model) + ": steady speed follows the command";
+  r.setup = "The modern four-wheel robot (" + Which(model) + ": wheels at 60°, 135°, 225°, "
             "300°) alone on the Div B field gets a local velocity command at 100 Hz for 1.5 s; the "
             "measured velocity (ground truth, robot frame) is averaged over the next 0.5 s. Each metric "
             "is the measured over the commanded value.";
   struct Case { const char* name; double forward, left, angular; };
   for (const Case c : {Case{"forward", 1.0, 0, 0}, Case{"fast_forward", 2.5, 0, 0}, Case{"sideways", 0, 1.0, 0},
                        Case{"diagonal", 1.0, -1.0, 0}, Case{"turning", 0, 0, 4.0}}) {
-    Bench bench(env, OneRobot(env, "worlds/div-b.yaml", kOmniRobot));
+    Bench bench(env, OneRobot(env, "worlds/div-b.yaml", model.file));
     const LocalVelocityCommand cmd{c.forward, c.left, c.angular};
     bench.Drive(kRobot, cmd, 1.5);
     Vec3 sum = Vec3::Zero();
@@ -62,13 +72,15 @@ ScenarioResult OmniSteadyVelocity(const Environment& env) {
   return r;
 }
 
-ScenarioResult OmniAcceleration(const Environment& env) {
+ScenarioResult OmniAcceleration(const Environment& env, const OmniModel& model) {
   ScenarioResult r;
-  r.id = "omni_acceleration";
-  r.title = "Omni robot: speed-up follows the acceleration limit";
-  r.setup = "The modern four-wheel robot (limit 3 m/s², physics.md §3c) is commanded 2 m/s forward from "
+  r.id = std::string(model.drive) + "_acceleration";
+  r.title = RobotName(model) + ": speed-up follows the acceleration limit";
+  r.setup = "The modern four-wheel robot (" +
+            (IsWheelBody(model) ? std::string() : Which(model) + "; ") +
+            "limit 3 m/s², physics.md §3c) is commanded 2 m/s forward from "
             "rest; the slope of measured speed over time between 20 % and 80 % of the target is fitted.";
-  Bench bench(env, OneRobot(env, "worlds/div-b.yaml", kOmniRobot));
+  Bench bench(env, OneRobot(env, "worlds/div-b.yaml", model.file));
   constexpr double kTarget = 2.0, kLimit = 3.0;
   std::vector<double> t, v, ideal;
   for (int k = 0; k < 100; ++k) {
@@ -82,8 +94,10 @@ ScenarioResult OmniAcceleration(const Environment& env) {
   r.metrics.push_back(Band("final_speed_vs_command", v.back() / kTarget, "ratio", 0.97, 1.03,
                            "issue: within 3 %"));
   Plot p;
-  p.file = "omni-acceleration.svg";
-  p.title = "Omni robot: 2 m/s commanded from rest, 3 m/s² limit";
+  std::string file = model.drive;
+  std::replace(file.begin(), file.end(), '_', '-');
+  p.file = file + "-acceleration.svg";
+  p.title = RobotName(model) + ": 2 m/s commanded from rest, 3 m/s² limit";
   p.x_label = "time (s)";
   p.y_label = "forward speed (m/s)";
   p.series = {Series{"ÜberSim", t, v, false}, Series{"ideal (limit 3 m/s²)", t, ideal, true}};

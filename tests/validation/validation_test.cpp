@@ -71,6 +71,22 @@ TEST(PhysicsValidation, OmniRobotHoldsCommandedVelocities) { RunAndCheck("omni_s
 
 TEST(PhysicsValidation, OmniRobotSpeedsUpAtItsLimit) { RunAndCheck("omni_acceleration"); }
 
+TEST(PhysicsValidation, OmniForceRobotHoldsCommandedVelocities) {
+  const ScenarioResult r = RunAndCheck("omni_force_steady_velocity");
+  // One rigid body pushed by the wheel forces: the only steady error is the rollers' drag over
+  // the wheels' servo stiffness, about a millimetre per second.
+  EXPECT_NEAR(r.Get("forward_speed").value, 1.0, 0.002);
+  EXPECT_NEAR(r.Get("sideways_speed").value, 1.0, 0.002);
+  EXPECT_NEAR(r.Get("turning_angular_speed").value, 1.0, 0.001);
+}
+
+TEST(PhysicsValidation, OmniForceRobotSpeedsUpAtItsLimit) {
+  const ScenarioResult r = RunAndCheck("omni_force_acceleration");
+  EXPECT_NEAR(r.Get("acceleration_vs_limit").value, 1.0, 0.01);
+  ASSERT_EQ(r.plots.size(), 1u);
+  EXPECT_EQ(r.plots[0].file, "omni-force-acceleration.svg");  // not the omni drive's plot
+}
+
 TEST(PhysicsValidation, KickerClampsFlatKicksAndChipsAtItsAngle) {
   const ScenarioResult r = RunAndCheck("kicker_speeds");
   EXPECT_NEAR(r.Get("flat_kick_commanded_10").value, 6.5, 0.1);
@@ -80,6 +96,18 @@ TEST(PhysicsValidation, DribblerHoldsTheBallDrivingAndTurningAndLosesItSpinning)
   const ScenarioResult r = RunAndCheck("dribbler_hold");
   EXPECT_EQ(r.Get("drive_1m_and_turn_90_held_fraction").value, 1.0);
   EXPECT_EQ(r.Get("fast_spin_8_rad_s_loses_the_ball").value, 1.0);
+}
+
+TEST(PhysicsValidation, OmniForceRobotsKickerClampsFlatKicksAndChipsAtItsAngle) {
+  const ScenarioResult r = RunAndCheck("omni_force_kicker_speeds");
+  EXPECT_NEAR(r.Get("flat_kick_commanded_10").value, 6.5, 0.1);
+}
+
+TEST(PhysicsValidation, OmniForceRobotsDribblerHoldsTheBallDrivingAndTurningAndLosesItSpinning) {
+  const ScenarioResult r = RunAndCheck("omni_force_dribbler_hold");
+  EXPECT_EQ(r.Get("drive_1m_and_turn_90_held_fraction").value, 1.0);
+  EXPECT_EQ(r.Get("fast_spin_8_rad_s_loses_the_ball").value, 1.0);
+  EXPECT_EQ(r.plots.at(0).file, "omni-force-dribbler-hold.svg");
 }
 
 TEST(PhysicsValidation, PaperDifferentialRobotAcceleratesAtTwoMetresPerSecondSquared) {
@@ -96,8 +124,11 @@ TEST(PhysicsValidation, PaperFigureEightAtPointEightMetresPerSecond) {
 TEST(PhysicsValidation, EveryScenarioIsCoveredHere) {
   // A scenario added to the list without a test here would go unasserted.
   const std::vector<std::string> tested = {"ball_roll_2", "ball_roll_5", "chip_flight", "no_tunnelling",
-                                           "omni_steady_velocity", "omni_acceleration", "kicker_speeds",
-                                           "dribbler_hold", "paper_acceleration", "paper_figure_eight"};
+                                           "omni_steady_velocity", "omni_acceleration",
+                                           "omni_force_steady_velocity", "omni_force_acceleration",
+                                           "kicker_speeds", "dribbler_hold", "omni_force_kicker_speeds",
+                                           "omni_force_dribbler_hold", "paper_acceleration",
+                                           "paper_figure_eight"};
   std::vector<std::string> all;
   for (const Scenario& s : AllScenarios()) all.push_back(s.id);
   EXPECT_EQ(all, tested);
