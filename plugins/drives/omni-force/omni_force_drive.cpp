@@ -103,11 +103,11 @@ class OmniForceDrive final : public ubersim::Drive {
       w.centre = radial * distance_ + Vec3(0, 0, wheel_radius_ - chassis_z);
       w.mu_axle = surface.mu;
       w.mu_roll = surface.mu2;
-      // The support: a sphere of the wheel's radius at its centre touches the carpet at one point
-      // under the axle, as AddDrivenWheel's carpet contact does, so the robot stands as high as on
-      // wheels (kSettle above it: see there). It pokes out of the shell (0.079 + 0.029 m > 0.09 m), so it keeps only its
-      // carpet contacts; the ball, walls and robots meet the chassis shell, as they would meet
-      // the shell around real wheels.
+      // The support: a sphere of the wheel's radius at its centre (kSettle higher: see there)
+      // touches the carpet at one point under the axle, as AddDrivenWheel's carpet contact does,
+      // so the robot stands as high as on wheels. It pokes out of the shell (0.079 + 0.029 m >
+      // 0.09 m on the modern robot), so it keeps only its carpet contacts; the ball, walls and
+      // robots meet the chassis shell, as they would meet the shell around real wheels.
       ubersim::GeomSpec support;
       support.name = "wheel" + std::to_string(i);
       support.shape = ubersim::Shape::Sphere(wheel_radius_);
