@@ -16,8 +16,6 @@ namespace {
 
 constexpr unsigned long kCarpetBit = 1;  // the carpet (a plane)
 constexpr unsigned long kOtherBit = 2;   // everything else
-constexpr double kMotorSpeed = 100.0;    // rad/s: random wheel speeds up to about 3 m/s
-constexpr double kBallSpeed = 6.5;       // m/s, the rules' limit
 
 // What the near callback needs of a copied geometry.
 struct GeomInfo {
@@ -101,8 +99,8 @@ void CopyJointParams(dJointID from, dJointID to, int type) {
 }  // namespace
 
 BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
-    : world_(dWorldCreate()), space_(dHashSpaceCreate(nullptr)), contacts_(dJointGroupCreate(0)),
-      rng_(seed) {
+    : world_(dWorldCreate()), space_(dHashSpaceCreate(nullptr)),
+      contacts_(dJointGroupCreate(0)) {
   const dWorldID from = world.ode_world();
   dWorldID w = world_.get();
   dVector3 gravity;
@@ -126,6 +124,7 @@ BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
     body_of[b.id()] = bodies_.back().get();
   });
   ball_ = body_of.at(world.ball().id());
+  kernel_ball_ = world.ball().id();
 
   // One carpet and one other static geometry to probe contact observers with.
   GeomImpl* carpet = nullptr;
@@ -205,7 +204,7 @@ BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
           dJointGetHingeAxis(from_joint, v);
           dJointSetHingeAxis(to, v[0], v[1], v[2]);
           CopyJointParams(from_joint, to, type);
-          if (dJointGetHingeParam(to, dParamFMax) > 0) motors_.push_back(Motor{to, kMotorSpeed});
+          motors_.push_back(Motor{from_joint, to});
           break;
         case dJointTypeSlider:
           dJointGetSliderAxis(from_joint, v);
@@ -292,26 +291,29 @@ void BareOdeMirror::Collide(dGeomID a, dGeomID b) {
   }
 }
 
+void BareOdeMirror::FollowMotors() {
+  for (const Motor& m : motors_) {
+    dJointSetHingeParam(m.copy, dParamVel, dJointGetHingeParam(m.kernel, dParamVel));
+    dJointSetHingeParam(m.copy, dParamFMax, dJointGetHingeParam(m.kernel, dParamFMax));
+  }
+}
+
+void BareOdeMirror::FollowBall() {
+  const dReal* p = dBodyGetPosition(kernel_ball_);
+  dBodySetPosition(ball_, p[0], p[1], p[2]);
+  const dReal* v = dBodyGetLinearVel(kernel_ball_);
+  dBodySetLinearVel(ball_, v[0], v[1], v[2]);
+  const dReal* w = dBodyGetAngularVel(kernel_ball_);
+  dBodySetAngularVel(ball_, w[0], w[1], w[2]);
+}
+
 void BareOdeMirror::Step() {
-  const auto every = [this](double seconds) {
-    return std::max<std::int64_t>(1, std::llround(seconds / step_));
-  };
-  if (steps_ % every(0.5) == 0) {
-    std::uniform_real_distribution<double> speed(-1.0, 1.0);
-    for (const Motor& m : motors_) dJointSetHingeParam(m.joint, dParamVel, m.max_speed * speed(rng_));
-  }
-  if (steps_ % every(1.5) == 0) {
-    std::uniform_real_distribution<double> angle(-M_PI, M_PI);
-    const double a = angle(rng_);
-    dBodySetLinearVel(ball_, kBallSpeed * std::cos(a), kBallSpeed * std::sin(a), 0.0);
-  }
   last_contacts_ = 0;
   dSpaceCollide(space_.get(), this, &NearCallback);
   dRandSetSeed(ode_seed_);
   dWorldQuickStep(world_.get(), step_);
   ode_seed_ = dRandGetSeed();
   dJointGroupEmpty(contacts_.get());
-  ++steps_;
 }
 
 }  // namespace ubersim::kernel::bench

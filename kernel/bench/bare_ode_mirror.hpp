@@ -6,7 +6,6 @@
 #pragma once
 
 #include <cstdint>
-#include <random>
 #include <vector>
 
 #include "ubersim/kernel/ode_handles.hpp"
@@ -21,13 +20,17 @@ class BareOdeMirror {
   /// Contacts a plugin filters out (a wheel's tyre never touches the carpet, its carpet sphere
   /// touches nothing else) are filtered here with ODE's category bits, found by asking each
   /// geometry's contact observers once. Throws std::runtime_error for an ODE class it cannot copy.
-  BareOdeMirror(World& world, std::uint64_t seed);
+  BareOdeMirror(World& world, std::uint64_t seed);  // seed: ODE's own random generator
   ~BareOdeMirror();
   BareOdeMirror(const BareOdeMirror&) = delete;
   BareOdeMirror& operator=(const BareOdeMirror&) = delete;
 
-  /// One step: motors get new seeded random speeds every 0.5 s and the ball a random kick
-  /// every 1.5 s (as the kernel world's random play), then collide, QuickStep, clear contacts.
+  /// Gives every motor the speed and torque its twin in `world` has now (the kernel's drive
+  /// plugins set them), so both worlds drive the same way; not part of the timed step.
+  void FollowMotors();
+  /// Puts the ball where the kernel's is, at its velocity (after the random play moved it).
+  void FollowBall();
+  /// One step: collide, QuickStep, clear contacts.
   void Step();
 
   /// Bodies, geometries, joints copied.
@@ -44,8 +47,8 @@ class BareOdeMirror {
 
  private:
   struct Motor {
-    dJointID joint;
-    double max_speed;  // rad/s (or m/s), the range of the random commands
+    dJointID kernel;  // the joint in the kernel world
+    dJointID copy;    // its copy here
   };
   static void NearCallback(void* data, dGeomID a, dGeomID b);
   void Collide(dGeomID a, dGeomID b);
@@ -59,12 +62,11 @@ class BareOdeMirror {
   std::vector<OdeJoint> joints_;
   std::vector<Motor> motors_;
   dBodyID ball_ = nullptr;
+  dBodyID kernel_ball_ = nullptr;
   double step_ = 0.001;
   int max_contacts_ = 4;
-  std::int64_t steps_ = 0;
   int last_contacts_ = 0;
   unsigned long ode_seed_ = 0;
-  std::mt19937_64 rng_;
 };
 
 }  // namespace ubersim::kernel::bench

@@ -84,9 +84,10 @@ void RandomPlay::NewTarget(Player& p, std::int64_t now_ns) {
   p.next_target_ns = now_ns + hold(rng_);
 }
 
-void RandomPlay::BeforeStep() {
+bool RandomPlay::BeforeStep() {
   const std::int64_t now = world_.clock().time_ns();
-  if (now < next_radio_ns_ && now < next_ball_ns_) return;
+  if (now < next_radio_ns_ && now < next_ball_ns_) return false;
+  bool ball_moved = false;
   const WorldSnapshot s = world_.Snapshot();
   if (now >= next_radio_ns_) {
     next_radio_ns_ = now + kRadioPeriodNs;
@@ -120,8 +121,10 @@ void RandomPlay::BeforeStep() {
       const double a = angle(rng_);
       e.velocity = Vec3(kBallSpeed * std::cos(a), kBallSpeed * std::sin(a), 0.0);
       world_.events().Post(e);
+      ball_moved = true;
     }
   }
+  return ball_moved;
 }
 
 double ResidentMegabytes() { return StatusKilobytes("VmRSS") / 1024.0; }
@@ -179,17 +182,30 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
     const std::int64_t report_every = std::max<std::int64_t>(1, steps / 50);
     double peak = ResidentMegabytes();
 
+    // Kernel and baseline step in lockstep, each timed on its own: the baseline's motors follow
+    // the kernel's (set by the drive plugins) and its ball follows the random play's kicks, so
+    // both worlds drive the same way and make about the same contacts.
     const StepTimings before = world.timings();
-    const auto t0 = SteadyClock::now();
+    SteadyClock::duration kernel_time{}, baseline_time{};
     for (std::int64_t i = 0; i < steps; ++i) {
-      play.BeforeStep();
+      const bool ball_moved = play.BeforeStep();
+      const auto t0 = SteadyClock::now();
       world.Step();
+      const auto t1 = SteadyClock::now();
+      kernel_time += t1 - t0;
+      if (mirror) {
+        mirror->FollowMotors();
+        if (ball_moved) mirror->FollowBall();
+        const auto t2 = SteadyClock::now();
+        mirror->Step();
+        baseline_time += SteadyClock::now() - t2;
+      }
       if (i % report_every == 0) {
         peak = std::max(peak, ResidentMegabytes());
-        if (progress) progress(r.world, 0.5 * static_cast<double>(i) / static_cast<double>(steps));
+        if (progress) progress(r.world, static_cast<double>(i) / static_cast<double>(steps));
       }
     }
-    r.wall_seconds = std::chrono::duration<double>(SteadyClock::now() - t0).count();
+    r.wall_seconds = std::chrono::duration<double>(kernel_time).count();
     const StepTimings t = Minus(world.timings(), before);
     r.sim_seconds = world.clock().seconds();
     r.real_time_factor = r.sim_seconds / r.wall_seconds;
@@ -204,17 +220,9 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
     r.split.other = std::max(0.0, 1.0 - r.split.collision - r.split.physics - r.split.plugins -
                                       r.split.perception - r.split.transports - r.split.events);
     r.rss_peak_mb = std::max(peak, ResidentMegabytes());
-
     if (mirror) {
-      const auto b0 = SteadyClock::now();
-      for (std::int64_t i = 0; i < steps; ++i) {
-        mirror->Step();
-        if (progress && i % report_every == 0) {
-          progress(r.world, 0.5 + 0.5 * static_cast<double>(i) / static_cast<double>(steps));
-        }
-      }
       r.baseline = true;
-      r.baseline_wall_seconds = std::chrono::duration<double>(SteadyClock::now() - b0).count();
+      r.baseline_wall_seconds = std::chrono::duration<double>(baseline_time).count();
       r.baseline_real_time_factor = r.sim_seconds / r.baseline_wall_seconds;
       r.kernel_overhead = r.wall_seconds / r.baseline_wall_seconds - 1.0;
     }

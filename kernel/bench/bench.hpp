@@ -46,7 +46,7 @@ struct BenchResult {
   int solver_iterations = 0;   ///< QuickStep iterations
   int max_contacts = 0;        ///< contacts per geometry pair
   double sim_seconds = 0;      ///< simulated
-  double wall_seconds = 0;     ///< spent stepping
+  double wall_seconds = 0;     ///< spent in World::Step (not in the random play)
   double real_time_factor = 0; ///< sim_seconds / wall_seconds
   double steps_per_second = 0; ///< physics steps per wall second
   double step_microseconds = 0;  ///< wall time per step, µs
@@ -55,7 +55,7 @@ struct BenchResult {
   double rss_peak_mb = 0;      ///< highest resident memory seen while it ran, MB
   int bodies = 0, geoms = 0, joints = 0;  ///< ODE objects of the model (from the baseline copy)
   bool baseline = false;       ///< the baseline ran
-  double baseline_wall_seconds = 0;       ///< bare ODE, same steps
+  double baseline_wall_seconds = 0;       ///< bare ODE, same steps, same motor commands
   double baseline_real_time_factor = 0;   ///< bare ODE
   double kernel_overhead = 0;  ///< kernel wall / baseline wall − 1
 };
@@ -67,8 +67,8 @@ class RandomPlay {
  public:
   /// Plays in `world` with this seed.
   RandomPlay(World& world, std::uint64_t seed);
-  /// Posts the commands due before the next step.
-  void BeforeStep();
+  /// Posts the commands due before the next step; true when it moved the ball.
+  bool BeforeStep();
 
  private:
   struct Player {

@@ -326,8 +326,10 @@ void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }
 void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
   if (AbovePlane(a, b)) return;
   ++stats_.narrow_tests;
+  const bool with_plane = a.GetShape().kind == Shape::Kind::kPlane || b.GetShape().kind == Shape::Kind::kPlane;
+  const int asked = with_plane ? kContactCandidates : max_contacts_;
   const int n = SpreadContacts(
-      scratch_, dCollide(a.id(), b.id(), kContactCandidates, scratch_.data(), sizeof(dContactGeom)), max_contacts_);
+      scratch_, dCollide(a.id(), b.id(), asked, scratch_.data(), sizeof(dContactGeom)), max_contacts_);
   if (n <= 0) return;
   ++stats_.touching_pairs;
   const SurfaceMaterial pair_surface = materials_.Resolve(a.Material(), b.Material());

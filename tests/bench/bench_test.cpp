@@ -2,6 +2,7 @@
 // `ubersim bench`'s parts: the bare-ODE copy of a world, the random play, one short run. No
 // timing is asserted here (the machines are shared); the figures live in docs/performance.md.
 #include <cmath>
+#include <map>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -31,8 +32,12 @@ TEST_F(BenchWorld, TheBaselineCopiesEveryBodyAndJointAndItsRobotsStandOnTheirWhe
   auto world = Make("div-b");
   int bodies = 0;
   std::vector<std::pair<int, double>> chassis;  // body index, start height
+  std::map<int, Eigen::Vector2d> start_xy;
   world->scene().Root().ForEachBody([&](BodyImpl& b) {
-    if (b.Name() == "chassis") chassis.emplace_back(bodies, b.GetPose().position.z());
+    if (b.Name() == "chassis") {
+      chassis.emplace_back(bodies, b.GetPose().position.z());
+      start_xy[bodies] = b.GetPose().position.head<2>();
+    }
     ++bodies;
   });
   ASSERT_EQ(chassis.size(), 12u);
@@ -47,12 +52,30 @@ TEST_F(BenchWorld, TheBaselineCopiesEveryBodyAndJointAndItsRobotsStandOnTheirWhe
   EXPECT_EQ(mirror.joints(), joints);
   EXPECT_GT(mirror.geoms(), bodies);  // wheels carry two each, plus the field
 
-  // Driven at random for 2 s, every chassis stays at its height: it stands on its wheels (the
-  // tyres' carpet spheres), not on the chassis or a tyre's rim.
-  for (int i = 0; i < 2000; ++i) mirror.Step();
+  // Driven by the kernel's motor commands for 2 s, every chassis stays at its height: it stands
+  // on its wheels (the tyres' carpet spheres), not on the chassis or a tyre's rim; and each robot
+  // goes where its twin in the kernel goes.
+  RandomPlay play(*world, 5);
+  for (int i = 0; i < 2000; ++i) {
+    const bool ball_moved = play.BeforeStep();
+    world->Step();
+    mirror.FollowMotors();
+    if (ball_moved) mirror.FollowBall();
+    mirror.Step();
+  }
+  double moved = 0, apart = 0;
   for (const auto& [index, z] : chassis) {
     EXPECT_NEAR(mirror.BodyPosition(index).z(), z, 0.003) << "chassis body " << index;
+    int k = 0;
+    Vec3 kernel_position = Vec3::Zero();
+    world->scene().Root().ForEachBody([&](BodyImpl& b) {
+      if (k++ == index) kernel_position = b.GetPose().position;
+    });
+    apart += (mirror.BodyPosition(index) - kernel_position).head<2>().norm() / 12.0;
+    moved += (kernel_position.head<2>() - start_xy.at(index)).norm() / 12.0;
   }
+  EXPECT_GT(moved, 0.5) << "the robots drove";
+  EXPECT_LT(apart, 0.25 * moved) << "the copy drove the same way";
   // About one carpet contact per wheel (a wheel briefly lifted while robots collide).
   EXPECT_GT(mirror.last_contacts(), 12 * 4 * 3 / 4);
   EXPECT_LT(mirror.last_contacts(), 12 * 4 * 2) << "the tyres' cylinders must not touch the carpet";

@@ -25,8 +25,10 @@ enum class Broadphase {
 /// Parses "scene_graph", "hash" or "sap"; throws std::invalid_argument otherwise.
 Broadphase ParseBroadphase(const std::string& name);
 
-/// How many contact points ODE may report for one pair before they are thinned to the world's
-/// max_contacts.
+/// How many contact points ODE may report for a pair with a plane (a chassis or convex on the
+/// carpet) before they are thinned to the world's max_contacts. Other pairs ask ODE for
+/// max_contacts directly: spreading matters where a body rests on a plane, and robot against
+/// robot, two trimeshes, costs in proportion to the points asked for.
 inline constexpr int kContactCandidates = 64;
 
 /// Thins the first `found` contacts to at most `keep`: the deepest, then each time the one
