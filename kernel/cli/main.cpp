@@ -464,7 +464,8 @@ int BenchCommand(const std::vector<std::string>& args) {
       }
     }
     std::ostringstream warnings;
-    StreamLog log(warnings, LogLevel::kWarning);
+    // Random commands draw warnings (a diff robot told to strafe): expected here, not shown.
+    StreamLog log(warnings, LogLevel::kError);
     std::vector<fs::path> search = ToPaths(plugin_paths);
     for (const auto& w : options.worlds) {
       for (const auto& p : WorldPluginPaths(w)) search.push_back(p);
