@@ -141,7 +141,9 @@ BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
   // Geometries with their offsets, surfaces and contact filters.
   world.scene().Root().ForEachGeom([&](GeomImpl& g) {
     if (!g.collides()) return;
-    const auto [carpet_ok, other_ok] = ProbeObservers(g, carpet, wall);
+    auto [carpet_ok, other_ok] = ProbeObservers(g, carpet, wall);
+    carpet_ok = carpet_ok && g.scope() != ContactScope::kNoPlanes;
+    other_ok = other_ok && g.scope() != ContactScope::kPlanesOnly;
     if (!carpet_ok && !other_ok) return;
     dGeomID copy = CopyShape(g.id());
     geoms_.emplace_back(copy);

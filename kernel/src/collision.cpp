@@ -224,8 +224,23 @@ void CollisionManager::SetBroadphase(Broadphase broadphase) {
   }
 }
 
+namespace {
+
+// Whether `g`'s contact scope lets it touch `other`.
+bool InScope(const GeomImpl& g, const GeomImpl& other) {
+  switch (g.scope()) {
+    case ContactScope::kAll: return true;
+    case ContactScope::kPlanesOnly: return other.is_plane();
+    case ContactScope::kNoPlanes: return !other.is_plane();
+  }
+  return true;
+}
+
+}  // namespace
+
 bool CollisionManager::MayCollide(const GeomImpl& a, const GeomImpl& b) {
   if (&a == &b || !a.collides() || !b.collides()) return false;
+  if (!InScope(a, b) || !InScope(b, a)) return false;
   if (!a.body() && !b.body()) return false;  // two static geometries never move apart
   if (a.body() == b.body()) return false;
   const NodeImpl* na = &a.owner();
@@ -278,6 +293,7 @@ struct SphereTree {
       if (!h->collides()) continue;
       if (!g.body() && !h->body()) continue;
       if (g.body() == h->body()) continue;
+      if (!InScope(g, *h) || !InScope(*h, g)) continue;
       ++tests;
       // Spheres prune the tree; a final box test drops long walls' many false positives.
       if (gb.Overlaps(h->cached_bounds()) && AabbsOverlap(g.id(), h->id())) f(g, *h);
@@ -326,10 +342,8 @@ void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }
 void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
   if (AbovePlane(a, b)) return;
   ++stats_.narrow_tests;
-  const bool with_plane = a.GetShape().kind == Shape::Kind::kPlane || b.GetShape().kind == Shape::Kind::kPlane;
-  const int asked = with_plane ? kContactCandidates : max_contacts_;
   const int n = SpreadContacts(
-      scratch_, dCollide(a.id(), b.id(), asked, scratch_.data(), sizeof(dContactGeom)), max_contacts_);
+      scratch_, dCollide(a.id(), b.id(), kContactCandidates, scratch_.data(), sizeof(dContactGeom)), max_contacts_);
   if (n <= 0) return;
   ++stats_.touching_pairs;
   const SurfaceMaterial pair_surface = materials_.Resolve(a.Material(), b.Material());

@@ -159,6 +159,7 @@ GeomImpl::GeomImpl(NodeImpl& owner, const GeomSpec& spec, BodyImpl* body)
       friction_axis_(spec.friction_axis),
       body_(body),
       collides_(spec.collides),
+      scope_(spec.scope),
       bounding_radius_(spec.shape.BoundingRadius()) {
   const Shape& s = shape_;
   auto positive = [&](double v, const char* what) {

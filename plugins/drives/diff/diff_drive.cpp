@@ -200,6 +200,7 @@ class DiffDrive final : public ubersim::Drive {
       ball.offset.position = Vec3(casters[i].x, 0.0, casters[i].radius - chassis_z);
       ball.material = surface;
       // Only the carpet: a caster hides under the chassis, nothing else should reach it.
+      ball.scope = ubersim::ContactScope::kPlanesOnly;
       ubersim::Geom& g = ctx.Node().AddGeom(ball, &chassis);
       ctx.ObserveContacts(g, [this](const ubersim::Contact& c, ubersim::SurfaceMaterial& s, bool& accept) {
         accept = accept && OnCarpet(c);

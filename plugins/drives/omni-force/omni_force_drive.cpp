@@ -113,6 +113,7 @@ class OmniForceDrive final : public ubersim::Drive {
       support.shape = ubersim::Shape::Sphere(wheel_radius_);
       support.offset.position = w.centre + Vec3(0, 0, kSettle);
       support.material = surface;
+      support.scope = ubersim::ContactScope::kPlanesOnly;
       ubersim::Geom& geom = ctx.Node().AddGeom(support, &chassis);
       ctx.ObserveContacts(geom, [this, i](const ubersim::Contact& c, ubersim::SurfaceMaterial& s, bool& accept) {
         const ubersim::Shape& other = c.other->GetShape();

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <memory>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -71,6 +72,14 @@ struct SurfaceMaterial {
   double slip = 0.0;              ///< force-dependent slip (both directions), s/kg
 };
 
+/// Which geometries a geometry makes contacts with. Decided before any contact point is
+/// computed, so it costs nothing, unlike dropping contacts in a contact observer afterwards.
+enum class ContactScope : std::uint8_t {
+  kAll,         ///< everything
+  kPlanesOnly,  ///< only planes (the carpet): a wheel's ground contact, a support
+  kNoPlanes,    ///< everything but planes: a tyre whose ground contact is a geometry of its own
+};
+
 /// What a geometry adds to the scene: shape, pose relative to its body (or the node, when
 /// static), surface, and optional directional friction.
 struct GeomSpec {
@@ -82,6 +91,7 @@ struct GeomSpec {
   /// and `material.mu2` across it: an omni wheel's rollers (mu along the axle) in one line.
   std::optional<Vec3> friction_axis;
   bool collides = true;                ///< false: a sensor-like geometry that never makes contacts
+  ContactScope scope = ContactScope::kAll;  ///< what it may touch
 };
 
 /// Mass properties of a body.

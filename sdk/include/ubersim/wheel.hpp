@@ -29,7 +29,8 @@ struct WheelSpec {
 /// SetMotor). The carpet touches the wheel at one point under its centre — a sphere of the
 /// wheel's radius — as a real wheel does at its rim or roller; a flat-ended cylinder on a plane
 /// would touch at both rims and the inner rim would set the track. Everything else (the ball,
-/// walls, other robots) touches the cylinder.
+/// walls, other robots) touches the cylinder. Contact scopes keep the two apart before any
+/// contact is computed.
 inline Joint& AddDrivenWheel(RobotContext& ctx, const WheelSpec& spec) {
   Body& chassis = ctx.Chassis();
   const Pose chassis_pose = chassis.GetPose();
@@ -46,19 +47,14 @@ inline Joint& AddDrivenWheel(RobotContext& ctx, const WheelSpec& spec) {
   tyre.name = "tyre";
   tyre.shape = Shape::Cylinder(spec.radius, spec.width);
   tyre.material = spec.tyre;
+  tyre.scope = ContactScope::kNoPlanes;
   if (spec.rollers_along_axle) tyre.friction_axis = Vec3::UnitZ();  // the cylinder's axis is the axle
-  Geom& tyre_geom = node.AddGeom(tyre, &wheel);
+  node.AddGeom(tyre, &wheel);
   GeomSpec contact = tyre;
   contact.name = "carpet_contact";
   contact.shape = Shape::Sphere(spec.radius);
-  Geom& contact_geom = node.AddGeom(contact, &wheel);
-  const auto on_carpet = [](const Contact& c) { return c.other->GetShape().kind == Shape::Kind::kPlane; };
-  ctx.ObserveContacts(tyre_geom, [on_carpet](const Contact& c, SurfaceMaterial&, bool& accept) {
-    accept = accept && !on_carpet(c);
-  });
-  ctx.ObserveContacts(contact_geom, [on_carpet](const Contact& c, SurfaceMaterial&, bool& accept) {
-    accept = accept && on_carpet(c);
-  });
+  contact.scope = ContactScope::kPlanesOnly;
+  node.AddGeom(contact, &wheel);
 
   JointSpec hinge;
   hinge.name = "axle";

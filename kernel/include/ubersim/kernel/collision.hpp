@@ -25,10 +25,9 @@ enum class Broadphase {
 /// Parses "scene_graph", "hash" or "sap"; throws std::invalid_argument otherwise.
 Broadphase ParseBroadphase(const std::string& name);
 
-/// How many contact points ODE may report for a pair with a plane (a chassis or convex on the
-/// carpet) before they are thinned to the world's max_contacts. Other pairs ask ODE for
-/// max_contacts directly: spreading matters where a body rests on a plane, and robot against
-/// robot, two trimeshes, costs in proportion to the points asked for.
+/// How many contact points ODE may report for one pair before they are thinned to the world's
+/// max_contacts. (Asking ODE for max_contacts alone gives its first-found points: a chassis
+/// pushed against a wall then jitters at 6 cm/s, and measured no faster.)
 inline constexpr int kContactCandidates = 64;
 
 /// Thins the first `found` contacts to at most `keep`: the deepest, then each time the one

@@ -62,6 +62,8 @@ class GeomImpl final : public Geom {
   BodyImpl* body() const { return body_; }                     ///< attached body or null
   NodeImpl& owner() const { return owner_; }                   ///< owning node
   bool collides() const { return collides_; }                  ///< takes part in collisions
+  ContactScope scope() const { return scope_; }                ///< what it may touch
+  bool is_plane() const { return shape_.kind == Shape::Kind::kPlane; }  ///< an infinite plane
   /// Directional-friction axis in the body frame, if any.
   const std::optional<Vec3>& friction_axis() const { return friction_axis_; }
   /// World bounding sphere now (infinite for planes).
@@ -89,6 +91,7 @@ class GeomImpl final : public Geom {
   std::optional<Vec3> friction_axis_;
   BodyImpl* body_;
   bool collides_;
+  ContactScope scope_;
   bool is_ball_ = false;
   double bounding_radius_;
   BoundingSphere cached_bounds_;
