@@ -321,10 +321,15 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
       "(README.md) with SVG plots. Exit code 5 when a number is outside its band.\n\noptions");
   std::string out = "docs/validation";
   std::vector<std::string> only, plugin_paths;
+  double step = 0;
+  int iterations = 0, contacts = 0;
   desc.add_options()("help,h", "this help")
       ("out", po::value<std::string>(&out)->default_value(out), "folder for README.md and the plots")
       ("only", po::value<std::vector<std::string>>(&only), "run only scenario ID (repeatable)")
       ("list", "list the scenarios and exit")
+      ("physics-step", po::value<double>(&step), "try this physics step, s, instead of the world files' (needs --out)")
+      ("solver-iterations", po::value<int>(&iterations), "try this many QuickStep iterations (needs --out)")
+      ("max-contacts", po::value<int>(&contacts), "try this many contacts per geometry pair (needs --out)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
   po::variables_map vm;
   try {
@@ -337,6 +342,17 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
   if (vm.count("help")) {
     std::cout << desc << "\n";
     return kExitOk;
+  }
+  const bool trying = vm.count("physics-step") || vm.count("solver-iterations") || vm.count("max-contacts");
+  if (trying && vm["out"].defaulted()) {
+    std::cerr << "ubersim validate-physics: give --out DIR when trying other physics settings ("
+              << out << " holds the report of the shipped settings)\n";
+    return kExitUsage;
+  }
+  if ((vm.count("physics-step") && !(step > 0 && step <= 0.02)) || (vm.count("solver-iterations") && iterations < 1) ||
+      (vm.count("max-contacts") && (contacts < 1 || contacts > 16))) {
+    std::cerr << "ubersim validate-physics: 0 < --physics-step <= 0.02, --solver-iterations >= 1, --max-contacts 1..16\n";
+    return kExitUsage;
   }
   if (vm.count("list")) {
     for (const auto& s : validation::AllScenarios()) std::printf("%-24s %s\n", s.id.c_str(), s.title.c_str());
@@ -357,6 +373,9 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
     StreamLog log(warnings, LogLevel::kWarning);
     PluginRegistry registry(PluginRegistry::DefaultSearchPaths(ToPaths(plugin_paths)));
     validation::Environment env{DataDir() / "models", ModelLoader::DefaultSchemaDir(), &registry, &log};
+    if (vm.count("physics-step")) env.physics_step = step;
+    if (vm.count("solver-iterations")) env.solver_iterations = iterations;
+    if (vm.count("max-contacts")) env.max_contacts = contacts;
     std::vector<validation::ScenarioResult> results;
     int out_of_band = 0;
     for (const validation::Scenario* s : chosen) {

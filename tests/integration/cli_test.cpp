@@ -121,6 +121,19 @@ TEST(Cli, BenchPrintsEachWorldWithItsBaselineAndRefusesBadOptions) {
   EXPECT_NE(missing.output.find("no-such-world"), std::string::npos) << missing.output;
 }
 
+TEST(Cli, ValidatePhysicsTriesOtherSettingsOnlyIntoAnotherFolder) {
+  const Result refused = RunUbersim("validate-physics --physics-step 0.002 --only ball_roll_2");
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("give --out DIR"), std::string::npos) << refused.output;
+  const fs::path dir = TempDir() / "tried";
+  const Result r = RunUbersim("validate-physics --physics-step 0.002 --solver-iterations 10 --only ball_roll_2 --out " +
+                              dir.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream report(dir / "README.md");
+  const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("--physics-step 0.002"), std::string::npos) << "the report names the settings it ran";
+}
+
 TEST(Cli, BatchRunsSeededWorldsOnWorkersAndChecksTheirHashesAgree) {
   const Result r = RunUbersim("batch ssl-2003 --count 2 --workers 2 --duration 0.2 --physics-step 0.002 --scaling");
   EXPECT_EQ(r.exit_code, 0) << r.output;

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,11 @@ struct Environment {
   std::filesystem::path schema_dir;      ///< folder with the model-file schemas
   kernel::PluginRegistry* registry = nullptr;  ///< finds the robots' plugins
   Log* log = nullptr;                    ///< warnings of the worlds built
+  /// Physics settings to try instead of the world files' (`validate-physics --physics-step` …):
+  /// every scenario's world gets them, so the bands say whether faster settings keep fidelity.
+  std::optional<double> physics_step;    ///< s
+  std::optional<int> solver_iterations;  ///< QuickStep iterations
+  std::optional<int> max_contacts;       ///< contacts per geometry pair
 };
 
 /// A named scenario.
