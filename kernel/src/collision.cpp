@@ -333,8 +333,63 @@ std::vector<std::pair<GeomImpl*, GeomImpl*>> CollisionManager::TouchingPairs() {
 
 void CollisionManager::Collide() {
   stats_ = CollisionStats{};
+  ball_touching_.clear();
   auto narrow = [this](GeomImpl& a, GeomImpl& b) { Narrow(a, b); };
   ForEachPair(narrow);
+  if (swept_ball_step_ > 0) SweepFastBalls();
+}
+
+void CollisionManager::SweepFastBalls() {
+  std::vector<GeomImpl*> balls;
+  graph_.Root().ForEachGeom([&](GeomImpl& g) {
+    if (g.is_ball() && g.body() && g.collides()) balls.push_back(&g);
+  });
+  for (GeomImpl* ball : balls) {
+    const Vec3 v = ball->body()->GetTwist().linear;
+    const double speed = v.norm();
+    const double radius = ball->GetShape().radius;
+    const double reach = speed * swept_ball_step_;
+    // Slower than half a radius per step, the ordinary contacts catch everything.
+    if (reach <= 0.5 * radius) continue;
+    const Vec3 from = ball->GetPose().position;
+    const Vec3 dir = v / speed;
+    if (!ray_) ray_.reset(dCreateRay(nullptr, 1.0));
+    dGeomRaySetLength(ray_.get(), reach + radius);
+    dGeomRaySet(ray_.get(), from.x(), from.y(), from.z(), dir.x(), dir.y(), dir.z());
+    dGeomRaySetFirstContact(ray_.get(), 0);
+    dGeomRaySetClosestHit(ray_.get(), 1);
+    // The ray's box: only geometries whose boxes it reaches are tested.
+    const Vec3 to = from + dir * (reach + radius);
+    const Vec3 lo = from.cwiseMin(to), hi = from.cwiseMax(to);
+    graph_.Root().ForEachGeom([&](GeomImpl& other) {
+      if (&other == ball || other.is_plane() || !MayCollide(*ball, other)) return;
+      dReal box[6];
+      dGeomGetAABB(other.id(), box);
+      if (box[1] < lo.x() || box[0] > hi.x() || box[3] < lo.y() || box[2] > hi.y() || box[5] < lo.z() ||
+          box[4] > hi.z()) {
+        return;
+      }
+      for (const auto& [a, b] : ball_touching_) {
+        if ((a == ball && b == &other) || (b == ball && a == &other)) return;  // touching already
+      }
+      dContactGeom hit;
+      if (dCollide(ray_.get(), other.id(), 1, &hit, sizeof(dContactGeom)) <= 0) return;
+      // The ball's surface reaches `other` within this step: a contact at the surface point,
+      // normal out of `other` toward the ball, no depth (ODE stops the approach there).
+      Vec3 normal = ToVec3(hit.normal);
+      if (normal.dot(dir) > 0) normal = -normal;
+      dContactGeom& cg = scratch_[0];
+      cg = hit;
+      cg.normal[0] = normal.x();
+      cg.normal[1] = normal.y();
+      cg.normal[2] = normal.z();
+      cg.depth = 0.0;
+      cg.g1 = ball->id();
+      cg.g2 = other.id();
+      ++stats_.swept_contacts;
+      AddContacts(*ball, other, 1);
+    });
+  }
 }
 
 void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }
@@ -346,6 +401,11 @@ void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
       scratch_, dCollide(a.id(), b.id(), kContactCandidates, scratch_.data(), sizeof(dContactGeom)), max_contacts_);
   if (n <= 0) return;
   ++stats_.touching_pairs;
+  if (a.is_ball() || b.is_ball()) ball_touching_.emplace_back(&a, &b);
+  AddContacts(a, b, n);
+}
+
+void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n) {
   const SurfaceMaterial pair_surface = materials_.Resolve(a.Material(), b.Material());
   // The geometry with directional friction (an omni wheel) decides the friction direction.
   const GeomImpl* directional = a.friction_axis() ? &a : (b.friction_axis() ? &b : nullptr);

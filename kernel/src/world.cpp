@@ -162,6 +162,8 @@ void World::Build() {
   for (const MaterialPair& p : model_.material_pairs) {
     collision_->materials().SetPair(p.a, p.b, p.surface);
   }
+  // Above 2 ms a 6.5 m/s shot moves more than half the ball's radius per step: sweep it.
+  collision_->SetSweptBallStep(ph.step);
 
   NodeImpl& root = scene_->Root();
   BuildField(*model_.field, static_cast<NodeImpl&>(root.AddChild("field")));

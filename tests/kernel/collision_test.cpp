@@ -232,6 +232,44 @@ TEST(CollisionManager, ObserversSeeContactsAndMayDropThem) {
   EXPECT_NEAR(normal.z(), 1.0, 1e-9);  // from the carpet into the sphere
 }
 
+// A 6.5 m/s ball at a 1 cm thin wall, stepped at 5 ms: 32.5 mm a step, more than the ball's
+// radius. Without the swept test it crosses the wall between two steps; with it, it bounces.
+double BallXAfterShotAtThinWall(bool swept) {
+  SmallScene s;
+  dWorldSetGravity(s.world.get(), 0, 0, 0);
+  constexpr double kStep = 0.005;
+  CollisionManager cm(s.graph, Broadphase::kSweepAndPrune, 4);
+  cm.SetSweptBallStep(swept ? kStep : 0.0);
+  SurfaceMaterial hard;
+  hard.bounce = 0.5;
+  s.graph.Root().AddChild("wall").AddGeom(
+      GeomSpec{"wall", Shape::Box(0.01, 1.0, 1.0), Pose{Vec3(0.3, 0, 0), Quat::Identity()}, hard, {}, true},
+      nullptr);
+  SceneNode& ball_node = s.graph.Root().AddChild("ball");
+  BodySpec b;
+  b.name = "ball";
+  b.mass = MassSpec::Solid(Shape::Sphere(0.0215), 0.046);
+  b.pose.position = Vec3(0.0113, 0, 0);  // the wall's face is crossed mid-step, not at a step's end
+  b.twist.linear = Vec3(6.5, 0, 0);
+  Body& body = ball_node.AddBody(b);
+  static_cast<GeomImpl&>(ball_node.AddGeom(GeomSpec{"ball", Shape::Sphere(0.0215), {}, hard, {}, true}, &body))
+      .set_is_ball(true);
+  std::size_t swept_contacts = 0;
+  for (int i = 0; i < 40; ++i) {  // 0.2 s: 1.3 m of flight
+    cm.Collide();
+    swept_contacts += cm.stats().swept_contacts;
+    dWorldQuickStep(s.world.get(), kStep);
+    cm.ClearContacts();
+  }
+  EXPECT_EQ(swept_contacts > 0, swept);
+  return body.GetPose().position.x();
+}
+
+TEST(CollisionManager, AFastBallIsSweptAndCannotCrossAThinWallBetweenSteps) {
+  EXPECT_GT(BallXAfterShotAtThinWall(false), 0.3) << "the check must be able to fail: unswept, it crosses";
+  EXPECT_LT(BallXAfterShotAtThinWall(true), 0.3 - 0.005 - 0.0215 + 1e-3) << "swept, it bounces off the wall";
+}
+
 TEST(CollisionManager, BroadphaseNamesRoundTrip) {
   for (Broadphase b : {Broadphase::kSceneGraph, Broadphase::kHash, Broadphase::kSweepAndPrune}) {
     EXPECT_EQ(ParseBroadphase(ToString(b)), b);

@@ -69,6 +69,7 @@ struct CollisionStats {
   std::size_t narrow_tests = 0;    ///< dCollide calls
   std::size_t touching_pairs = 0;  ///< pairs with at least one contact
   std::size_t contacts = 0;        ///< contact joints created
+  std::size_t swept_contacts = 0;  ///< of those, speculative contacts of fast balls
 };
 
 /// Finds colliding geometry pairs over the scene graph and turns contacts into ODE contact joints
@@ -97,6 +98,11 @@ class CollisionManager {
   std::vector<std::pair<GeomImpl*, GeomImpl*>> TouchingPairs();
   /// Broadphase + narrow phase, creating contact joints for the next physics step.
   void Collide();
+  /// Turns on the swept test of fast balls for a physics step of `dt` s: a ball that would
+  /// travel more than half its radius in one step casts a ray along its velocity, and whatever
+  /// it would reach within the step gets a contact now (a speculative contact, at the surface),
+  /// so a shot cannot cross a robot's shell or a wall between two steps. 0 turns it off.
+  void SetSweptBallStep(double dt) { swept_ball_step_ = dt; }
   /// Removes the contact joints of the last step.
   void ClearContacts();
   /// Counters of the last Collide().
@@ -107,6 +113,10 @@ class CollisionManager {
 
  private:
   void Narrow(GeomImpl& a, GeomImpl& b);
+  // Makes contact joints for the first n contacts in scratch_ (observers, surfaces, friction).
+  void AddContacts(GeomImpl& a, GeomImpl& b, int n);
+  // The swept test of every fast ball (SetSweptBallStep).
+  void SweepFastBalls();
   template <typename F>
   void ForEachPair(F& f);
 
@@ -118,6 +128,9 @@ class CollisionManager {
   OdeSpace space_;        // only for the ODE broadphases
   OdeJointGroup contacts_;
   std::vector<dContactGeom> scratch_;
+  double swept_ball_step_ = 0.0;
+  std::vector<std::pair<const GeomImpl*, const GeomImpl*>> ball_touching_;  // this step's ball pairs
+  OdeGeom ray_;           // the swept test's ray, reused
 };
 
 }  // namespace ubersim::kernel
