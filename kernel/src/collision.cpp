@@ -340,11 +340,14 @@ void CollisionManager::Collide() {
 }
 
 void CollisionManager::SweepFastBalls() {
-  std::vector<GeomImpl*> balls;
-  graph_.Root().ForEachGeom([&](GeomImpl& g) {
-    if (g.is_ball() && g.body() && g.collides()) balls.push_back(&g);
-  });
-  for (GeomImpl* ball : balls) {
+  if (!balls_found_) {  // the scene is complete by the first step; a reset builds a new manager
+    graph_.Root().ForEachGeom([&](GeomImpl& g) {
+      if (g.is_ball() && g.body()) balls_.push_back(&g);
+    });
+    balls_found_ = true;
+  }
+  for (GeomImpl* ball : balls_) {
+    if (!ball->collides()) continue;
     const Vec3 v = ball->body()->GetTwist().linear;
     const double speed = v.norm();
     const double radius = ball->GetShape().radius;

@@ -131,6 +131,8 @@ class CollisionManager {
   double swept_ball_step_ = 0.0;
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> ball_touching_;  // this step's ball pairs
   OdeGeom ray_;           // the swept test's ray, reused
+  std::vector<GeomImpl*> balls_;  // the balls, found at the first swept test
+  bool balls_found_ = false;
 };
 
 }  // namespace ubersim::kernel
