@@ -158,7 +158,7 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
       const auto robot = loader.LoadRobot(*options.robot_model);
       for (RobotPlacement& p : model.robots) p.model = robot;
     }
-    model.transports.clear();  // headless: no sockets, nothing waits on a network
+    if (!options.with_transports) model.transports.clear();  // headless: no sockets by default
 
     BenchResult r;
     r.world = model.name;
@@ -169,7 +169,7 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
     r.max_contacts = model.physics.max_contacts;
     r.rss_before_mb = ResidentMegabytes();
 
-    World world(model, registry, log, /*start_transports=*/false);
+    World world(model, registry, log, /*start_transports=*/options.with_transports);
     std::unique_ptr<BareOdeMirror> mirror;
     if (options.baseline) mirror = std::make_unique<BareOdeMirror>(world, options.seed);
     if (mirror) {
@@ -235,9 +235,9 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
 std::string FormatTable(const std::vector<BenchResult>& results) {
   std::ostringstream out;
   char line[512];
-  std::snprintf(line, sizeof line, "%-10s %6s %7s %5s %9s %10s %8s | %6s %6s %6s %6s %6s %6s | %8s | %9s %9s\n",
+  std::snprintf(line, sizeof line, "%-10s %6s %7s %5s %9s %10s %8s | %6s %6s %6s %6s %6s %6s %6s | %8s | %9s %9s\n",
                 "world", "robots", "step ms", "iter", "real-time", "steps/s", "µs/step", "coll", "ode",
-                "plugin", "percep", "events", "other", "peak MB", "bare ODE", "overhead");
+                "plugin", "percep", "transp", "events", "other", "peak MB", "bare ODE", "overhead");
   out << line;
   for (const BenchResult& r : results) {
     char baseline[64] = "-";
@@ -247,10 +247,11 @@ std::string FormatTable(const std::vector<BenchResult>& results) {
       std::snprintf(overhead, sizeof overhead, "%+.1f %%", 100.0 * r.kernel_overhead);
     }
     std::snprintf(line, sizeof line,
-                  "%-10s %6d %7.2f %5d %8.1f× %10.0f %8.1f | %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% | %8.1f | %9s %9s\n",
+                  "%-10s %6d %7.2f %5d %8.1f× %10.0f %8.1f | %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% | %8.1f | %9s %9s\n",
                   r.world.c_str(), r.robots, r.physics_step * 1e3, r.solver_iterations, r.real_time_factor,
                   r.steps_per_second, r.step_microseconds, 100 * r.split.collision, 100 * r.split.physics,
-                  100 * r.split.plugins, 100 * r.split.perception, 100 * r.split.events, 100 * r.split.other,
+                  100 * r.split.plugins, 100 * r.split.perception, 100 * r.split.transports, 100 * r.split.events,
+                  100 * r.split.other,
                   r.rss_peak_mb, baseline, overhead);
     out << line;
   }
@@ -261,8 +262,8 @@ std::string FormatMarkdown(const std::vector<BenchResult>& results, const std::s
                            const std::string& command) {
   std::ostringstream out;
   out << "Machine: " << machine << "\n\nCommand: `" << command << "`\n\n";
-  out << "| world | robots | bodies / geoms / joints | step | iterations | contacts per pair | real-time factor | steps/s | collision | ODE step | plugins | perception | events | other | peak memory | bare ODE | kernel overhead |\n";
-  out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  out << "| world | robots | bodies / geoms / joints | step | iterations | contacts per pair | real-time factor | steps/s | collision | ODE step | plugins | perception | transports | events | other | peak memory | bare ODE | kernel overhead |\n";
+  out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   char line[1024];
   for (const BenchResult& r : results) {
     char baseline[64] = "-";
@@ -272,10 +273,11 @@ std::string FormatMarkdown(const std::vector<BenchResult>& results, const std::s
       std::snprintf(overhead, sizeof overhead, "%+.0f %%", 100.0 * r.kernel_overhead);
     }
     std::snprintf(line, sizeof line,
-                  "| %s | %d | %d / %d / %d | %.2f ms | %d | %d | **%.1f×** | %.0f | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.1f MB | %s | %s |\n",
+                  "| %s | %d | %d / %d / %d | %.2f ms | %d | %d | **%.1f×** | %.0f | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.1f MB | %s | %s |\n",
                   r.world.c_str(), r.robots, r.bodies, r.geoms, r.joints, r.physics_step * 1e3, r.solver_iterations,
                   r.max_contacts, r.real_time_factor, r.steps_per_second, 100 * r.split.collision,
-                  100 * r.split.physics, 100 * r.split.plugins, 100 * r.split.perception, 100 * r.split.events,
+                  100 * r.split.physics, 100 * r.split.plugins, 100 * r.split.perception, 100 * r.split.transports,
+                  100 * r.split.events,
                   100 * r.split.other, r.rss_peak_mb, baseline, overhead);
     out << line;
   }

@@ -29,6 +29,7 @@ struct BenchOptions {
   std::optional<int> solver_iterations;        ///< override QuickStep iterations
   std::optional<int> max_contacts;             ///< override contacts per geometry pair
   std::optional<std::string> robot_model;      ///< replace every robot's model file
+  bool with_transports = false;                ///< start the worlds' transports (their ports must be free)
 };
 
 /// Shares of the kernel's wall time, 0..1.

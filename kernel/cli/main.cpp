@@ -437,6 +437,7 @@ int BenchCommand(const std::vector<std::string>& args) {
       ("max-contacts", po::value<int>(&contacts), "override contacts per geometry pair")
       ("robot", po::value<std::string>(&robot), "put this robot model file in every robot's place")
       ("markdown", po::value<std::string>(&markdown), "also write the results as Markdown to FILE")
+      ("with-transports", "also start the worlds' transports (viewer, SSL-Vision, …), to measure what publishing costs; their ports must be free")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
   po::options_description hidden;
   hidden.add_options()("world", po::value<std::vector<std::string>>(&worlds));
@@ -471,6 +472,7 @@ int BenchCommand(const std::vector<std::string>& args) {
     if (vm.count("solver-iterations")) options.solver_iterations = iterations;
     if (vm.count("max-contacts")) options.max_contacts = contacts;
     if (vm.count("robot")) options.robot_model = robot;
+    options.with_transports = vm.count("with-transports") > 0;
     if (worlds.empty()) {
       for (const char* w : {"ssl-2003", "div-b", "div-a"}) {
         options.worlds.push_back(DataDir() / "models" / "worlds" / (std::string(w) + ".yaml"));
