@@ -109,7 +109,10 @@ ScenarioResult PaperAcceleration(const Environment& env) {
     ideal.push_back(std::min(kTarget, kLimit * t.back()));
   }
   const double brake = bench.world().model().robots.front().model->drive->params["limits"].GetDouble("max_brake", 4.0);
-  for (std::size_t i = 150; i < t.size(); ++i) ideal[i] = std::max(0.0, kTarget - brake * (t[i] - 1.5));
+  // Braking starts when the stop command was sent: 1.5 s at the shipped step; a step that does
+  // not divide the 10 ms radio period makes each command period a little shorter or longer.
+  const double stop = t[149];
+  for (std::size_t i = 150; i < t.size(); ++i) ideal[i] = std::max(0.0, kTarget - brake * (t[i] - stop));
   double sq = 0;
   for (std::size_t i = 0; i < t.size(); ++i) sq += (v[i] - ideal[i]) * (v[i] - ideal[i]);
   r.metrics.push_back(Band("acceleration_vs_2_m_s2", SpeedUpSlope(t, v, kTarget, 150) / kLimit, "ratio", 0.95, 1.05,
