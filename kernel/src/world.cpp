@@ -132,6 +132,14 @@ World::World(const WorldModel& model, PluginRegistry& registry, Log& log, bool s
       transports_.push_back(std::move(host));
     }
   }
+  // The state before the first step, so a world started paused is seen (a viewer draws it).
+  PublishSnapshot();
+}
+
+void World::PublishSnapshot() {
+  if (transports_.empty()) return;
+  const WorldSnapshot snapshot = Snapshot();
+  for (auto& t : transports_) t->Guarded("Publish", [&](Transport& tr) { tr.Publish(snapshot); });
 }
 
 World::~World() {
@@ -199,6 +207,7 @@ void World::Reset() {
   radio_.Reset();
   Build();
   log_.Info("world reset to " + model_.file);
+  PublishSnapshot();  // seen at once, also while paused
 }
 
 Robot* World::FindRobot(const RobotId& id) const {

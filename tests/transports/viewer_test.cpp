@@ -454,6 +454,26 @@ struct ViewerWorld : ::testing::Test {
   }
 };
 
+TEST_F(ViewerWorld, AWorldThatHasNotSteppedIsSeenAndAResetShowsAtOnce) {
+  // As `ubersim run --paused` leaves it: built, never stepped.
+  WsClient page(port);
+  page.ReadType("hello");
+  const auto at_start = [](const rapidjson::Document& d) { return d["robots"].Size() == 12 && d["t"].GetDouble() == 0.0; };
+  ASSERT_TRUE(StateWhere(page, at_start, false).IsObject());
+  // Stepped on, then reset while paused: the page shows the start again without a step.
+  world->clock_control().paused = true;
+  for (int i = 0; i < 300; ++i) world->Step();
+  ASSERT_TRUE(StateWhere(page, [](const rapidjson::Document& d) { return d["t"].GetDouble() > 0.29; }, false).IsObject());
+  page.Send(R"({"cmd":"move","target":"ball","x":2.0,"y":1.0})");
+  page.ReadType("ack");
+  page.Send(R"({"cmd":"reset"})");
+  page.ReadType("ack");
+  const rapidjson::Document reset = StateWhere(page, at_start, false);
+  ASSERT_TRUE(reset.IsObject());
+  EXPECT_NEAR(reset["ball"]["x"].GetDouble(), world->model().ball_start.x(), 1e-9);
+  EXPECT_EQ(world->clock().steps(), 0);
+}
+
 TEST_F(ViewerWorld, APageSeesTheWorldAndItsCommandsReachTheKernel) {
   WsClient page(port);
   const rapidjson::Document hello = page.ReadType("hello");

@@ -74,10 +74,12 @@ class ViewerTransport final : public ubersim::Transport {
   }
 
   void Publish(const ubersim::WorldSnapshot& snapshot) override {
+    // Time going back is a reset: sample it whatever the rate, it may be all there is to see.
+    const bool reset = snapshot.sim_time_ns < published_time_ns_.load(std::memory_order_relaxed);
     published_step_ = snapshot.step;
     published_time_ns_.store(snapshot.sim_time_ns, std::memory_order_relaxed);
     const auto now = SteadyClock::now();
-    if (now < next_sample_) return;
+    if (now < next_sample_ && !reset) return;
     next_sample_ = now + period_;
     std::lock_guard lock(mutex_);
     ubersim::viewer::SampleSnapshot(snapshot, sample_);

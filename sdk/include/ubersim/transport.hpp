@@ -41,7 +41,8 @@ class UBERSIM_SDK_API Transport {
   virtual void Start(TransportContext& context) = 0;
   /// At the start of each step, on the simulation thread.
   virtual void Poll() {}
-  /// After each step with the ground truth; must be cheap (copy what you need and return).
+  /// After each step with the ground truth, and once before the first step and after a reset
+  /// (same step number, no stepping); must be cheap (copy what you need and return).
   virtual void Publish(const WorldSnapshot& /*snapshot*/) {}
   /// When a camera frame leaves the perception pipeline's latency queue.
   virtual void OnVisionFrame(const VisionFrame& /*frame*/) {}

@@ -100,6 +100,8 @@ class World {
 
  private:
   void Build();
+  // Hands the transports the state as it is (at start and after a reset, without a step).
+  void PublishSnapshot();
   void ApplyEvents(bool stepping);
   void Apply(const PositionEvent& e);
   void Apply(const CommandEvent& e);
