@@ -127,6 +127,17 @@ bool RandomPlay::BeforeStep() {
   return ball_moved;
 }
 
+WorldModel LoadTrialWorld(const ModelLoader& loader, const std::filesystem::path& file,
+                          const PhysicsOverrides& physics, const std::optional<std::string>& robot_file) {
+  WorldModel model = loader.LoadWorld(file);
+  physics.ApplyTo(model.physics);
+  if (robot_file) {
+    const auto robot = loader.LoadRobot(*robot_file);
+    for (RobotPlacement& p : model.robots) p.model = robot;
+  }
+  return model;
+}
+
 double ResidentMegabytes() { return StatusKilobytes("VmRSS") / 1024.0; }
 double PeakResidentMegabytes() { return StatusKilobytes("VmHWM") / 1024.0; }
 
@@ -150,14 +161,7 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
                                   const std::function<void(const std::string&, double)>& progress) {
   std::vector<BenchResult> results;
   for (const auto& file : options.worlds) {
-    WorldModel model = loader.LoadWorld(file);
-    if (options.physics_step) model.physics.step = *options.physics_step;
-    if (options.solver_iterations) model.physics.solver_iterations = *options.solver_iterations;
-    if (options.max_contacts) model.physics.max_contacts = *options.max_contacts;
-    if (options.robot_model) {
-      const auto robot = loader.LoadRobot(*options.robot_model);
-      for (RobotPlacement& p : model.robots) p.model = robot;
-    }
+    WorldModel model = LoadTrialWorld(loader, file, options.physics, options.robot_model);
     if (!options.with_transports) model.transports.clear();  // headless: no sockets by default
 
     BenchResult r;

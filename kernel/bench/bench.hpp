@@ -25,9 +25,7 @@ struct BenchOptions {
   double sim_seconds = 10.0;                   ///< simulated time per world, s
   std::uint64_t seed = 1;                      ///< random play and baseline commands
   bool baseline = true;                        ///< also step the bare-ODE baseline
-  std::optional<double> physics_step;          ///< override the worlds' physics step, s
-  std::optional<int> solver_iterations;        ///< override QuickStep iterations
-  std::optional<int> max_contacts;             ///< override contacts per geometry pair
+  PhysicsOverrides physics;                    ///< instead of the world files' settings
   std::optional<std::string> robot_model;      ///< replace every robot's model file
   bool with_transports = false;                ///< start the worlds' transports (their ports must be free)
 };
@@ -87,6 +85,11 @@ class RandomPlay {
   std::int64_t next_radio_ns_ = 0;
   std::int64_t next_ball_ns_ = 0;
 };
+
+/// A world file as bench and batch run it: other physics settings, and every robot replaced by
+/// `robot_file` when given. Its transports are left as the file has them.
+WorldModel LoadTrialWorld(const ModelLoader& loader, const std::filesystem::path& file,
+                          const PhysicsOverrides& physics, const std::optional<std::string>& robot_file);
 
 /// The machine and build the figures came from (CPU, cores, OS, compiler, ODE).
 std::string MachineDescription();

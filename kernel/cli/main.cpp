@@ -74,6 +74,40 @@ std::vector<fs::path> ToPaths(const std::vector<std::string>& v) {
   return std::vector<fs::path>(v.begin(), v.end());
 }
 
+// --physics-step, --solver-iterations, --max-contacts: one meaning and one check for every command
+// that tries other physics settings than the world files'.
+struct PhysicsFlags {
+  double step = 0;
+  int iterations = 0;
+  int contacts = 0;
+
+  void AddTo(po::options_description& desc) {
+    desc.add_options()
+        ("physics-step", po::value<double>(&step), "instead of the world files' physics step, s")
+        ("solver-iterations", po::value<int>(&iterations), "instead of the world files' QuickStep iterations")
+        ("max-contacts", po::value<int>(&contacts), "instead of the world files' contacts per geometry pair");
+  }
+  // The settings given; false (with the reason on stderr) when one is out of range.
+  bool Read(const po::variables_map& vm, const std::string& command, PhysicsOverrides& out) const {
+    if ((vm.count("physics-step") && !(step > 0 && step <= 0.02)) || (vm.count("solver-iterations") && iterations < 1) ||
+        (vm.count("max-contacts") && (contacts < 1 || contacts > 16))) {
+      std::cerr << "ubersim " << command
+                << ": 0 < --physics-step <= 0.02, --solver-iterations >= 1, --max-contacts 1..16\n";
+      return false;
+    }
+    if (vm.count("physics-step")) out.step = step;
+    if (vm.count("solver-iterations")) out.solver_iterations = iterations;
+    if (vm.count("max-contacts")) out.max_contacts = contacts;
+    return true;
+  }
+};
+
+// A world argument: a file, or the name of a shipped world ("div-a").
+fs::path WorldFileOf(const std::string& arg) {
+  const fs::path shipped = DataDir() / "models" / "worlds" / (arg + ".yaml");
+  return !fs::exists(arg) && fs::exists(shipped) ? shipped : fs::path(arg);
+}
+
 // The world file's own plugin_paths, read before the full load (its plugins' schemas need them).
 std::vector<fs::path> WorldPluginPaths(const fs::path& world_file) {
   std::vector<fs::path> out;
@@ -86,6 +120,16 @@ std::vector<fs::path> WorldPluginPaths(const fs::path& world_file) {
     out.push_back(p);
   }
   return out;
+}
+
+// Where plugins are looked for: the worlds' own plugin_paths, then --plugin-path (cli.md).
+std::vector<fs::path> PluginSearchPath(const std::vector<fs::path>& worlds, const std::vector<std::string>& plugin_paths) {
+  std::vector<fs::path> search;
+  for (const auto& w : worlds) {
+    for (const auto& p : WorldPluginPaths(w)) search.push_back(p);
+  }
+  for (const auto& p : ToPaths(plugin_paths)) search.push_back(p);
+  return PluginRegistry::DefaultSearchPaths(search);
 }
 
 PluginSchemaLookup LookupIn(PluginRegistry& registry) {
@@ -155,9 +199,7 @@ int RunCommand(const std::vector<std::string>& args) {
     return kExitRuntime;
   }
   try {
-    std::vector<fs::path> search = WorldPluginPaths(world_file);
-    for (const auto& p : ToPaths(plugin_paths)) search.push_back(p);
-    PluginRegistry registry(PluginRegistry::DefaultSearchPaths(search));
+    PluginRegistry registry(PluginSearchPath({world_file}, plugin_paths));
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(), LookupIn(registry));
     WorldModel model = loader.LoadWorld(world_file);
     if (vm.count("no-viewer")) skipped_transports.push_back("viewer");
@@ -321,16 +363,13 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
       "(README.md) with SVG plots. Exit code 5 when a number is outside its band.\n\noptions");
   std::string out = "docs/validation";
   std::vector<std::string> only, plugin_paths;
-  double step = 0;
-  int iterations = 0, contacts = 0;
+  PhysicsFlags physics_flags;
   desc.add_options()("help,h", "this help")
       ("out", po::value<std::string>(&out)->default_value(out), "folder for README.md and the plots")
       ("only", po::value<std::vector<std::string>>(&only), "run only scenario ID (repeatable)")
       ("list", "list the scenarios and exit")
-      ("physics-step", po::value<double>(&step), "try this physics step, s, instead of the world files' (needs --out)")
-      ("solver-iterations", po::value<int>(&iterations), "try this many QuickStep iterations (needs --out)")
-      ("max-contacts", po::value<int>(&contacts), "try this many contacts per geometry pair (needs --out)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
+  physics_flags.AddTo(desc);  // other settings need --out: the default folder is the shipped report
   po::variables_map vm;
   try {
     po::store(po::command_line_parser(args).options(desc).run(), vm);
@@ -343,15 +382,11 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
     std::cout << desc << "\n";
     return kExitOk;
   }
-  const bool trying = vm.count("physics-step") || vm.count("solver-iterations") || vm.count("max-contacts");
-  if (trying && vm["out"].defaulted()) {
+  PhysicsOverrides physics;
+  if (!physics_flags.Read(vm, "validate-physics", physics)) return kExitUsage;
+  if (physics.Any() && vm["out"].defaulted()) {
     std::cerr << "ubersim validate-physics: give --out DIR when trying other physics settings ("
               << out << " holds the report of the shipped settings)\n";
-    return kExitUsage;
-  }
-  if ((vm.count("physics-step") && !(step > 0 && step <= 0.02)) || (vm.count("solver-iterations") && iterations < 1) ||
-      (vm.count("max-contacts") && (contacts < 1 || contacts > 16))) {
-    std::cerr << "ubersim validate-physics: 0 < --physics-step <= 0.02, --solver-iterations >= 1, --max-contacts 1..16\n";
     return kExitUsage;
   }
   if (vm.count("list")) {
@@ -373,9 +408,7 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
     StreamLog log(warnings, LogLevel::kWarning);
     PluginRegistry registry(PluginRegistry::DefaultSearchPaths(ToPaths(plugin_paths)));
     validation::Environment env{DataDir() / "models", ModelLoader::DefaultSchemaDir(), &registry, &log};
-    if (vm.count("physics-step")) env.physics_step = step;
-    if (vm.count("solver-iterations")) env.solver_iterations = iterations;
-    if (vm.count("max-contacts")) env.max_contacts = contacts;
+    env.physics = physics;
     std::vector<validation::ScenarioResult> results;
     int out_of_band = 0;
     for (const validation::Scenario* s : chosen) {
@@ -424,21 +457,18 @@ int BenchCommand(const std::vector<std::string>& args) {
       "ODE alone (docs/performance.md).\n\noptions");
   double duration = 10.0;
   std::uint64_t seed = 1;
-  double step = 0;
-  int iterations = 0, contacts = 0;
+  PhysicsFlags physics_flags;
   std::string robot, markdown;
   std::vector<std::string> worlds, plugin_paths;
   desc.add_options()("help,h", "this help")
       ("duration", po::value<double>(&duration)->default_value(duration), "simulated seconds per world")
       ("seed", po::value<std::uint64_t>(&seed)->default_value(seed), "seed of the random play")
       ("no-baseline", "skip the bare-ODE baseline")
-      ("physics-step", po::value<double>(&step), "override the worlds' physics step, s")
-      ("solver-iterations", po::value<int>(&iterations), "override QuickStep iterations")
-      ("max-contacts", po::value<int>(&contacts), "override contacts per geometry pair")
       ("robot", po::value<std::string>(&robot), "put this robot model file in every robot's place")
       ("markdown", po::value<std::string>(&markdown), "also write the results as Markdown to FILE")
       ("with-transports", "also start the worlds' transports (viewer, SSL-Vision, …), to measure what publishing costs; their ports must be free")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
+  physics_flags.AddTo(desc);
   po::options_description hidden;
   hidden.add_options()("world", po::value<std::vector<std::string>>(&worlds));
   po::positional_options_description pos;
@@ -457,20 +487,16 @@ int BenchCommand(const std::vector<std::string>& args) {
     std::cout << desc << "\n";
     return kExitOk;
   }
-  if (!(duration > 0) || (vm.count("physics-step") && !(step > 0 && step <= 0.02)) ||
-      (vm.count("solver-iterations") && iterations < 1) || (vm.count("max-contacts") && (contacts < 1 || contacts > 16))) {
-    std::cerr << "ubersim bench: --duration > 0, 0 < --physics-step <= 0.02, --solver-iterations >= 1, "
-                 "--max-contacts 1..16\n";
+  if (!(duration > 0)) {
+    std::cerr << "ubersim bench: --duration must be > 0\n";
     return kExitUsage;
   }
+  bench::BenchOptions options;
+  if (!physics_flags.Read(vm, "bench", options.physics)) return kExitUsage;
   try {
-    bench::BenchOptions options;
     options.sim_seconds = duration;
     options.seed = seed;
     options.baseline = vm.count("no-baseline") == 0;
-    if (vm.count("physics-step")) options.physics_step = step;
-    if (vm.count("solver-iterations")) options.solver_iterations = iterations;
-    if (vm.count("max-contacts")) options.max_contacts = contacts;
     if (vm.count("robot")) options.robot_model = robot;
     options.with_transports = vm.count("with-transports") > 0;
     if (worlds.empty()) {
@@ -478,20 +504,12 @@ int BenchCommand(const std::vector<std::string>& args) {
         options.worlds.push_back(DataDir() / "models" / "worlds" / (std::string(w) + ".yaml"));
       }
     } else {
-      // A bare name ("div-a") means the shipped world of that name.
-      for (const std::string& w : worlds) {
-        const fs::path shipped = DataDir() / "models" / "worlds" / (w + ".yaml");
-        options.worlds.push_back(!fs::exists(w) && fs::exists(shipped) ? shipped : fs::path(w));
-      }
+      for (const std::string& w : worlds) options.worlds.push_back(WorldFileOf(w));
     }
     std::ostringstream warnings;
     // Random commands draw warnings (a diff robot told to strafe): expected here, not shown.
     StreamLog log(warnings, LogLevel::kError);
-    std::vector<fs::path> search = ToPaths(plugin_paths);
-    for (const auto& w : options.worlds) {
-      for (const auto& p : WorldPluginPaths(w)) search.push_back(p);
-    }
-    PluginRegistry registry(PluginRegistry::DefaultSearchPaths(search));
+    PluginRegistry registry(PluginSearchPath(options.worlds, plugin_paths));
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(), LookupIn(registry));
     const bool tty = isatty(STDERR_FILENO) != 0;
     const auto results = bench::RunBench(options, registry, loader, log, [&](const std::string& world, double f) {
@@ -560,8 +578,8 @@ int BatchCommand(const std::vector<std::string>& args) {
       "WORKERS processes; prints each world's figures and final state hash (the same seed gives\n"
       "the same hash, whatever the number of workers) and the total throughput.\n\noptions");
   int count = 4, workers = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
-  double duration = 10.0, step = 0;
-  int iterations = 0;
+  double duration = 10.0;
+  PhysicsFlags physics_flags;
   std::uint64_t seed = 1;
   std::string robot;
   std::vector<std::string> worlds, plugin_paths;
@@ -570,11 +588,10 @@ int BatchCommand(const std::vector<std::string>& args) {
       ("workers", po::value<int>(&workers)->default_value(workers), "worker processes (default: the cores)")
       ("duration", po::value<double>(&duration)->default_value(duration), "simulated seconds per world")
       ("seed", po::value<std::uint64_t>(&seed)->default_value(seed), "first seed")
-      ("physics-step", po::value<double>(&step), "override the worlds' physics step, s")
-      ("solver-iterations", po::value<int>(&iterations), "override QuickStep iterations")
       ("robot", po::value<std::string>(&robot), "put this robot model file in every robot's place")
       ("scaling", "run once on 1 worker, then on WORKERS, and print the speed-up (and check the hashes agree)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
+  physics_flags.AddTo(desc);
   po::options_description hidden;
   hidden.add_options()("world", po::value<std::vector<std::string>>(&worlds));
   po::positional_options_description pos;
@@ -593,36 +610,24 @@ int BatchCommand(const std::vector<std::string>& args) {
     std::cout << desc << "\n";
     return kExitOk;
   }
-  if (count < 1 || workers < 1 || !(duration > 0) || (vm.count("physics-step") && !(step > 0 && step <= 0.02)) ||
-      (vm.count("solver-iterations") && iterations < 1)) {
-    std::cerr << "ubersim batch: --count >= 1, --workers >= 1, --duration > 0, 0 < --physics-step <= 0.02, "
-                 "--solver-iterations >= 1\n";
+  if (count < 1 || workers < 1 || !(duration > 0)) {
+    std::cerr << "ubersim batch: --count >= 1, --workers >= 1, --duration > 0\n";
     return kExitUsage;
   }
+  PhysicsOverrides physics;
+  if (!physics_flags.Read(vm, "batch", physics)) return kExitUsage;
   if (worlds.empty()) worlds.push_back("div-b");
   try {
     std::vector<fs::path> files;
-    for (const std::string& w : worlds) {
-      const fs::path shipped = DataDir() / "models" / "worlds" / (w + ".yaml");
-      files.push_back(!fs::exists(w) && fs::exists(shipped) ? shipped : fs::path(w));
-    }
-    std::vector<fs::path> search = ToPaths(plugin_paths);
-    for (const auto& f : files) {
-      for (const auto& p : WorldPluginPaths(f)) search.push_back(p);
-    }
-    PluginRegistry registry(PluginRegistry::DefaultSearchPaths(search));
+    for (const std::string& w : worlds) files.push_back(WorldFileOf(w));
+    PluginRegistry registry(PluginSearchPath(files, plugin_paths));
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(), LookupIn(registry));
     // Load every model here first: a broken file is reported once, before any worker starts.
     std::vector<WorldModel> models;
     for (const auto& f : files) {
-      WorldModel m = loader.LoadWorld(f);
+      WorldModel m = bench::LoadTrialWorld(loader, f, physics,
+                                           vm.count("robot") ? std::optional<std::string>(robot) : std::nullopt);
       m.transports.clear();
-      if (vm.count("physics-step")) m.physics.step = step;
-      if (vm.count("solver-iterations")) m.physics.solver_iterations = iterations;
-      if (vm.count("robot")) {
-        const auto r = loader.LoadRobot(robot);
-        for (RobotPlacement& p : m.robots) p.model = r;
-      }
       models.push_back(std::move(m));
     }
     batch::BatchOptions options;

@@ -18,9 +18,7 @@ kernel::ModelLoader Loader(const Environment& env) {
 kernel::WorldModel LoadWorld(const Environment& env, const std::string& world) {
   kernel::WorldModel w = Loader(env).LoadWorld(env.models_dir / world);
   w.radio = kernel::RadioModel{};  // the physics is measured here, not the radio: no delay, no loss
-  if (env.physics_step) w.physics.step = *env.physics_step;
-  if (env.solver_iterations) w.physics.solver_iterations = *env.solver_iterations;
-  if (env.max_contacts) w.physics.max_contacts = *env.max_contacts;
+  env.physics.ApplyTo(w.physics);
   return w;
 }
 

@@ -103,7 +103,7 @@ TEST_F(BenchWorld, ARunReportsItsSplitAndTheBaseline) {
   BenchOptions o;
   o.worlds = {UBERSIM_SOURCE_DIR "/models/worlds/ssl-2003.yaml"};
   o.sim_seconds = 0.2;
-  o.physics_step = 0.002;
+  o.physics.step = 0.002;
   int calls = 0;
   const auto results = RunBench(o, registry, loader, log, [&](const std::string&, double) { ++calls; });
   ASSERT_EQ(results.size(), 1u);

@@ -99,6 +99,21 @@ struct PhysicsModel {
   double contact_max_correcting_velocity = 10.0;  ///< m/s
 };
 
+/// Physics settings tried instead of a world file's (bench, batch, validate-physics).
+struct PhysicsOverrides {
+  std::optional<double> step;           ///< fixed physics step, s
+  std::optional<int> solver_iterations;  ///< QuickStep iterations
+  std::optional<int> max_contacts;       ///< contacts per geometry pair
+  /// True when any is set.
+  bool Any() const { return step || solver_iterations || max_contacts; }
+  /// Sets those given in `physics`.
+  void ApplyTo(PhysicsModel& physics) const {
+    if (step) physics.step = *step;
+    if (solver_iterations) physics.solver_iterations = *solver_iterations;
+    if (max_contacts) physics.max_contacts = *max_contacts;
+  }
+};
+
 /// A transport instance of a world.
 struct TransportModel {
   std::string plugin;   ///< plugin id

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "ubersim/log.hpp"
+#include "ubersim/kernel/model.hpp"
 #include "ubersim/kernel/plugin_registry.hpp"
 #include "ubersim/validation/result.hpp"
 
@@ -21,9 +22,7 @@ struct Environment {
   Log* log = nullptr;                    ///< warnings of the worlds built
   /// Physics settings to try instead of the world files' (`validate-physics --physics-step` …):
   /// every scenario's world gets them, so the bands say whether faster settings keep fidelity.
-  std::optional<double> physics_step;    ///< s
-  std::optional<int> solver_iterations;  ///< QuickStep iterations
-  std::optional<int> max_contacts;       ///< contacts per geometry pair
+  kernel::PhysicsOverrides physics;
 };
 
 /// A named scenario.
