@@ -201,12 +201,7 @@ void SampleSnapshot(const WorldSnapshot& s, WorldSample& out) {
     RobotSample& o = out.robots[i];
     o.id = r.id;
     o.present = r.present;
-    o.x = r.pose.position.x();
-    o.y = r.pose.position.y();
-    o.yaw = r.pose.Yaw();
-    o.vx = r.twist.linear.x();
-    o.vy = r.twist.linear.y();
-    o.w = r.twist.angular.z();
+    o.SetMotion(r.pose, r.twist);
     o.contact = r.dribbler_ball_contact;
     o.kicker_ready = r.kicker_ready;
     o.radius = r.radius;

@@ -23,6 +23,16 @@ struct RobotSample {
   bool contact = false;          ///< dribbler touches the ball
   bool kicker_ready = false;     ///< kicker charged
   double radius = 0.09, height = 0.15;  ///< m
+
+  /// Takes pose and velocity (a snapshot's, or a query's answer while paused).
+  void SetMotion(const Pose& pose, const Twist& twist) {
+    x = pose.position.x();
+    y = pose.position.y();
+    yaw = pose.Yaw();
+    vx = twist.linear.x();
+    vy = twist.linear.y();
+    w = twist.angular.z();
+  }
 };
 
 /// The world as the page draws it: a compact copy of one snapshot.

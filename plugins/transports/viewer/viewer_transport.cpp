@@ -84,7 +84,6 @@ class ViewerTransport final : public ubersim::Transport {
     std::lock_guard lock(mutex_);
     ubersim::viewer::SampleSnapshot(snapshot, sample_);
     have_sample_ = true;
-    sample_wall_ = now;
   }
 
   void OnVisionFrame(const ubersim::VisionFrame& frame) override {
@@ -133,7 +132,7 @@ class ViewerTransport final : public ubersim::Transport {
     const auto now = SteadyClock::now();
     WorldSample sample;
     std::vector<ubersim::VisionFrame> frames;
-    RateSample rate;
+    std::uint64_t frames_received = 0;
     int cameras_seen = 0;
     {
       std::lock_guard lock(mutex_);
@@ -143,7 +142,7 @@ class ViewerTransport final : public ubersim::Transport {
         frames.push_back(c.frame);
         if (now - c.received <= kRateWindow) ++cameras_seen;
       }
-      rate = RateSample{sample_wall_, sample_.sim_time_ns, frames_received_};
+      frames_received = frames_received_;
     }
     // The world's own time (every step), not the sample's (every 1/rate): the last steps before
     // a pause may fall between two samples.
@@ -157,7 +156,8 @@ class ViewerTransport final : public ubersim::Transport {
       refresh_now_ = true;
       refreshed_at_stop_ = true;
     }
-    rates_.push_back(RateSample{now, rate.sim_time_ns, rate.frames});
+    const RateSample rate{now, sample.sim_time_ns, frames_received};
+    rates_.push_back(rate);
     while (rates_.size() > 2 && now - rates_.front().wall > kRateWindow) rates_.pop_front();
 
     ViewerStatus status;
@@ -202,14 +202,8 @@ class ViewerTransport final : public ubersim::Transport {
       events_->Post(ubersim::QueryEvent{ubersim::Target::Robot(id), [this, i, id](const ubersim::ObjectState& s) {
         std::lock_guard lock(mutex_);
         if (!s.found || i >= sample_.robots.size() || !(sample_.robots[i].id == id)) return;
-        ubersim::viewer::RobotSample& r = sample_.robots[i];
-        r.present = s.present;
-        r.x = s.pose.position.x();
-        r.y = s.pose.position.y();
-        r.yaw = s.pose.Yaw();
-        r.vx = s.twist.linear.x();
-        r.vy = s.twist.linear.y();
-        r.w = s.twist.angular.z();
+        sample_.robots[i].present = s.present;
+        sample_.robots[i].SetMotion(s.pose, s.twist);
       }});
     }
   }
@@ -241,7 +235,6 @@ class ViewerTransport final : public ubersim::Transport {
   std::mutex mutex_;
   WorldSample sample_;
   bool have_sample_ = false;
-  SteadyClock::time_point sample_wall_{};
   std::map<int, Camera> cameras_;
   std::uint64_t frames_received_ = 0;
   ViewerStatus status_;
