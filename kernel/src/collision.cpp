@@ -46,8 +46,8 @@ bool AabbsOverlap(dGeomID a, dGeomID b) {
 // chassis riding over the carpet would test every vertex each step. Exact: ODE makes contacts
 // only where something penetrates the plane.
 bool AbovePlane(const GeomImpl& a, const GeomImpl& b) {
-  const bool a_plane = a.GetShape().kind == Shape::Kind::kPlane;
-  if (!a_plane && b.GetShape().kind != Shape::Kind::kPlane) return false;
+  const bool a_plane = a.is_plane();
+  if (!a_plane && !b.is_plane()) return false;
   const GeomImpl& plane = a_plane ? a : b;
   const GeomImpl& other = a_plane ? b : a;
   dVector4 p;
@@ -89,7 +89,7 @@ Vec3 PointVelocity(const GeomImpl& g, const Vec3& p) {
 // pairs: walls, goals and robots keep ODE's pyramid, whose behaviour their tests pin down).
 Vec3 BallSlip(const GeomImpl& a, const GeomImpl& b, const Vec3& p, const Vec3& normal) {
   const auto on_plane = [](const GeomImpl& ball, const GeomImpl& other) {
-    return ball.is_ball() && other.GetShape().kind == Shape::Kind::kPlane;
+    return ball.is_ball() && other.is_plane();
   };
   if (!on_plane(a, b) && !on_plane(b, a)) return Vec3::Zero();
   const Vec3 v = PointVelocity(a, p) - PointVelocity(b, p);

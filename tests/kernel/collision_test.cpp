@@ -232,6 +232,38 @@ TEST(CollisionManager, ObserversSeeContactsAndMayDropThem) {
   EXPECT_NEAR(normal.z(), 1.0, 1e-9);  // from the carpet into the sphere
 }
 
+// A geometry's scope decides before the narrow phase: a carpet-only sphere resting on the carpet
+// and against a box touches only the carpet; a no-planes one only the box.
+std::set<std::string> TouchedBy(ContactScope scope, Broadphase broadphase) {
+  SmallScene s;
+  CollisionManager cm(s.graph, broadphase, 4);
+  s.graph.Root().AddChild("field").AddGeom(
+      GeomSpec{"carpet", Shape::Plane(Vec3::UnitZ(), 0), {}, {}, {}, true}, nullptr);
+  s.graph.Root().AddChild("block").AddGeom(
+      GeomSpec{"box", Shape::Box(0.1, 0.1, 0.1), Pose{Vec3(0.09, 0, 0.05), Quat::Identity()}, {}, {}, true}, nullptr);
+  SceneNode& n = s.graph.Root().AddChild("thing");
+  BodySpec b;
+  b.name = "b";
+  b.mass = MassSpec::Solid(Shape::Sphere(0.05), 0.1);
+  b.pose.position = Vec3(0, 0, 0.049);  // 1 mm into the carpet and 1 mm into the box
+  Body& body = n.AddBody(b);
+  GeomSpec sphere{"s", Shape::Sphere(0.05), {}, {}, {}, true};
+  sphere.scope = scope;
+  auto& g = static_cast<GeomImpl&>(n.AddGeom(sphere, &body));
+  std::set<std::string> touched;
+  g.AddObserver([&](const Contact& c, SurfaceMaterial&, bool&) { touched.insert(c.other->Name()); });
+  cm.Collide();
+  return touched;
+}
+
+TEST(CollisionManager, ContactScopesDropPairsBeforeTheNarrowPhase) {
+  for (Broadphase bp : {Broadphase::kSceneGraph, Broadphase::kSweepAndPrune}) {
+    EXPECT_EQ(TouchedBy(ContactScope::kAll, bp), (std::set<std::string>{"carpet", "box"})) << ToString(bp);
+    EXPECT_EQ(TouchedBy(ContactScope::kPlanesOnly, bp), std::set<std::string>{"carpet"}) << ToString(bp);
+    EXPECT_EQ(TouchedBy(ContactScope::kNoPlanes, bp), std::set<std::string>{"box"}) << ToString(bp);
+  }
+}
+
 // A 6.5 m/s ball at a 1 cm thin wall, stepped at 5 ms: 32.5 mm a step, more than the ball's
 // radius. Without the swept test it crosses the wall between two steps; with it, it bounces.
 double BallXAfterShotAtThinWall(bool swept) {

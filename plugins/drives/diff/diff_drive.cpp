@@ -28,10 +28,6 @@ constexpr double kGlobalLateralTolerance = 0.01;
 // At most one "lateral part dropped" warning per this much simulated time, s.
 constexpr double kWarningInterval = 1.0;
 
-bool OnCarpet(const ubersim::Contact& c) {
-  return c.other->GetShape().kind == ubersim::Shape::Kind::kPlane;
-}
-
 // Warns about dropped lateral commands: the first at once, then at most one per interval, each
 // saying how many were dropped since the previous warning.
 class LateralWarning {
@@ -202,8 +198,7 @@ class DiffDrive final : public ubersim::Drive {
       // Only the carpet: a caster hides under the chassis, nothing else should reach it.
       ball.scope = ubersim::ContactScope::kPlanesOnly;
       ubersim::Geom& g = ctx.Node().AddGeom(ball, &chassis);
-      ctx.ObserveContacts(g, [this](const ubersim::Contact& c, ubersim::SurfaceMaterial& s, bool& accept) {
-        accept = accept && OnCarpet(c);
+      ctx.ObserveContacts(g, [this](const ubersim::Contact&, ubersim::SurfaceMaterial& s, bool&) {
         // ODE's contact as a spring k and damper d over a step h: ERP = hk/(hk+d), CFM = 1/(hk+d).
         const double hk = dt_ * caster_stiffness_;
         s.soft_erp = hk / (hk + caster_damping_);

@@ -116,8 +116,8 @@ class OmniForceDrive final : public ubersim::Drive {
       support.scope = ubersim::ContactScope::kPlanesOnly;
       ubersim::Geom& geom = ctx.Node().AddGeom(support, &chassis);
       ctx.ObserveContacts(geom, [this, i](const ubersim::Contact& c, ubersim::SurfaceMaterial& s, bool& accept) {
-        const ubersim::Shape& other = c.other->GetShape();
-        if (other.kind != ubersim::Shape::Kind::kPlane || other.plane_normal.z() < 0.9) {
+        // Its scope lets only planes through; of those, the carpet (a wall could be a plane too).
+        if (c.other->GetShape().plane_normal.z() < 0.9) {
           accept = false;
           return;
         }
