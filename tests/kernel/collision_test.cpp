@@ -232,6 +232,29 @@ TEST(CollisionManager, ObserversSeeContactsAndMayDropThem) {
   EXPECT_NEAR(normal.z(), 1.0, 1e-9);  // from the carpet into the sphere
 }
 
+// A body whose box lies wholly above the carpet is never narrow-tested against it (a trimesh
+// chassis would test every vertex); one that reaches down to it is.
+std::size_t NarrowTestsWithBoxAt(double z) {
+  SmallScene s;
+  CollisionManager cm(s.graph, Broadphase::kSweepAndPrune, 4);
+  s.graph.Root().AddChild("field").AddGeom(
+      GeomSpec{"carpet", Shape::Plane(Vec3::UnitZ(), 0), {}, {}, {}, true}, nullptr);
+  SceneNode& n = s.graph.Root().AddChild("thing");
+  BodySpec b;
+  b.name = "b";
+  b.mass = MassSpec::Solid(Shape::Box(0.1, 0.1, 0.1), 1.0);
+  b.pose.position = Vec3(0, 0, z);
+  Body& body = n.AddBody(b);
+  n.AddGeom(GeomSpec{"box", Shape::Box(0.1, 0.1, 0.1), {}, {}, {}, true}, &body);
+  cm.Collide();
+  return cm.stats().narrow_tests;
+}
+
+TEST(CollisionManager, SkipsThePlaneForABoxWhollyAboveIt) {
+  EXPECT_EQ(NarrowTestsWithBoxAt(0.051), 0u);  // bottom 1 mm above the carpet
+  EXPECT_EQ(NarrowTestsWithBoxAt(0.049), 1u);  // bottom 1 mm into it
+}
+
 // A geometry's scope decides before the narrow phase: a carpet-only sphere resting on the carpet
 // and against a box touches only the carpet; a no-planes one only the box.
 std::set<std::string> TouchedBy(ContactScope scope, Broadphase broadphase) {
