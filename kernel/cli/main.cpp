@@ -407,7 +407,7 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
     std::ostringstream warnings;
     StreamLog log(warnings, LogLevel::kWarning);
     PluginRegistry registry(PluginRegistry::DefaultSearchPaths(ToPaths(plugin_paths)));
-    validation::Environment env{DataDir() / "models", ModelLoader::DefaultSchemaDir(), &registry, &log};
+    validation::Environment env{DataDir() / "models", ModelLoader::DefaultSchemaDir(), &registry, &log, {}};
     env.physics = physics;
     std::vector<validation::ScenarioResult> results;
     int out_of_band = 0;

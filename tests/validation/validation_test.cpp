@@ -16,7 +16,7 @@ struct Env {
   std::ostringstream text;
   kernel::StreamLog log{text, LogLevel::kWarning};
   kernel::PluginRegistry registry{{UBERSIM_PLUGIN_BUILD_DIR}};
-  Environment env{UBERSIM_SOURCE_DIR "/models", UBERSIM_SOURCE_DIR "/schemas", &registry, &log};
+  Environment env{UBERSIM_SOURCE_DIR "/models", UBERSIM_SOURCE_DIR "/schemas", &registry, &log, {}};
 };
 
 // Runs a scenario and checks every metric against its band, naming the ones outside.
