@@ -419,13 +419,27 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n) {
     bool accept = true;
     const Vec3 position = ToVec3(cg.pos);
     const Vec3 normal = ToVec3(cg.normal);  // points out of b (g2) into a (g1)
+    // Each side's observers may set its own surface's velocity (a roller fixed to its body).
+    Vec3 moving_a = Vec3::Zero(), moving_b = Vec3::Zero();
+    surface.surface_velocity = Vec3::Zero();
     for (const auto& h : a.observers()) {
       h(Contact{&a, &b, b.is_ball(), position, normal, cg.depth}, surface, accept);
+      moving_a = surface.surface_velocity;
     }
+    surface.surface_velocity = Vec3::Zero();
     for (const auto& h : b.observers()) {
       h(Contact{&b, &a, a.is_ball(), position, -normal, cg.depth}, surface, accept);
+      moving_b = surface.surface_velocity;
     }
     if (!accept) continue;
+    // ODE's friction rows hold (v1 - v2)·t = motion at the contact, body 1 being a's unless a is
+    // static: then ODE attaches b's body first and turns the normal round. Surfaces moving over
+    // their bodies meet without slip when v1 - v2 = moving2 - moving1.
+    const bool reversed = !a.body() && b.body();
+    const Vec3 ode_normal = reversed ? Vec3(-normal) : normal;
+    Vec3 motion = reversed ? Vec3(moving_a - moving_b) : Vec3(moving_b - moving_a);
+    motion -= normal * normal.dot(motion);
+    const bool surface_moves = motion.norm() > 1e-9;
 
     dContact c{};
     c.geom = cg;
@@ -442,6 +456,23 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n) {
         c.fdir1[1] = dir.y();
         c.fdir1[2] = dir.z();
         c.surface.mu2 = Mu2(surface);
+        if (surface_moves) {
+          mode |= dContactMotion1 | dContactMotion2;
+          c.surface.motion1 = motion.dot(dir);
+          c.surface.motion2 = motion.dot(ode_normal.cross(dir));  // ODE's second direction: n × t1
+        }
+      }
+    } else if (surface_moves) {
+      // Friction pulls toward the moving surface's speed: its direction first, both directions mu.
+      const Vec3 dir = motion.normalized();
+      mode |= dContactFDir1 | dContactMotion1;
+      c.fdir1[0] = dir.x();
+      c.fdir1[1] = dir.y();
+      c.fdir1[2] = dir.z();
+      c.surface.motion1 = motion.norm();
+      if (surface.mu2 >= 0 && surface.mu2 != surface.mu) {
+        mode |= dContactMu2;
+        c.surface.mu2 = surface.mu2;
       }
     } else if (const Vec3 slip = BallSlip(a, b, position, normal); slip.norm() > kSlipThreshold) {
       // ODE's friction is a pyramid: each of two directions holds up to mu·N on its own, so a

@@ -3,6 +3,7 @@
 // finds, less pairs inside one subtree line (ancestor/descendant or same node), two static
 // geometries, or two geometries of one body — for every broadphase.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <random>
 #include <set>
@@ -323,6 +324,42 @@ double BallXAfterShotAtThinWall(bool swept) {
 TEST(CollisionManager, AFastBallIsSweptAndCannotCrossAThinWallBetweenSteps) {
   EXPECT_GT(BallXAfterShotAtThinWall(false), 0.3) << "the check must be able to fail: unswept, it crosses";
   EXPECT_LT(BallXAfterShotAtThinWall(true), 0.3 - 0.005 - 0.0215 + 1e-3) << "swept, it bounces off the wall";
+}
+
+// A conveyor: a static slab whose observer says its surface moves at 0.5 m/s along +x. A box
+// resting on it is dragged up to that speed by friction (ODE attaches a static geometry's
+// contact the other way round: the sign must survive that), and a box on a still slab stays put.
+// Body against body is the dribbler's case (tests/parts/dribbler_test.cpp).
+double BoxSpeedOnConveyor(double belt_speed, Broadphase broadphase) {
+  SmallScene s;
+  constexpr double kStep = 0.001;
+  dWorldSetGravity(s.world.get(), 0, 0, -9.81);
+  CollisionManager cm(s.graph, broadphase, 4);
+  auto& slab = static_cast<GeomImpl&>(s.graph.Root().AddChild("slab").AddGeom(
+      GeomSpec{"slab", Shape::Box(2.0, 1.0, 0.1), Pose{Vec3(0, 0, -0.05), Quat::Identity()}, {}, {}, true}, nullptr));
+  slab.AddObserver([&](const Contact&, SurfaceMaterial& m, bool&) { m.surface_velocity = Vec3(belt_speed, 0, 0); });
+  SceneNode& box_node = s.graph.Root().AddChild("box");
+  BodySpec b;
+  b.name = "box";
+  b.mass = MassSpec::Solid(Shape::Box(0.1, 0.1, 0.1), 1.0);
+  b.pose.position = Vec3(0, 0, 0.0499);
+  Body& body = box_node.AddBody(b);
+  box_node.AddGeom(GeomSpec{"box", Shape::Box(0.1, 0.1, 0.1), {}, {}, {}, true}, &body);
+  for (int i = 0; i < 500; ++i) {  // 0.5 s: mu 0.5 reaches 0.5 m/s in about 0.1 s
+    cm.Collide();
+    dWorldQuickStep(s.world.get(), kStep);
+    cm.ClearContacts();
+  }
+  EXPECT_LT(std::abs(body.GetTwist().linear.y()), 1e-4) << "dragged sideways";
+  return body.GetTwist().linear.x();
+}
+
+TEST(CollisionManager, AMovingSurfaceDragsWhatRestsOnIt) {
+  for (Broadphase bp : {Broadphase::kSceneGraph, Broadphase::kSweepAndPrune}) {
+    EXPECT_NEAR(BoxSpeedOnConveyor(0.5, bp), 0.5, 1e-3) << ToString(bp);
+    EXPECT_NEAR(BoxSpeedOnConveyor(-0.5, bp), -0.5, 1e-3) << ToString(bp);
+    EXPECT_NEAR(BoxSpeedOnConveyor(0.0, bp), 0.0, 1e-4) << ToString(bp);
+  }
 }
 
 TEST(CollisionManager, BroadphaseNamesRoundTrip) {

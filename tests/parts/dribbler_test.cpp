@@ -4,6 +4,13 @@
 // reports touching the ball, spins it backwards, and leaves the robot standing still.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -27,13 +34,46 @@ struct MouthTracker {
   }
 };
 
+// The shipped modern robot (its bar fixed to the chassis, only the surface turning:
+// bar_model surface) and the same robot with the bar a body on a motorised hinge.
+enum class BarModel { kSurface, kHinge };
+
+std::string HingeBarRobot();
+
+class RollerDribbler : public ::testing::TestWithParam<BarModel> {
+ protected:
+  static std::string RobotFile() { return GetParam() == BarModel::kSurface ? std::string(kModernRobot) : HingeBarRobot(); }
+};
+
+// The modern robot file with its bar on a hinge, written once per test process.
+std::string HingeBarRobot() {
+  static const std::string file = [] {
+    std::ifstream in(kModernRobot);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string yaml = text.str();
+    const std::string from = "bar_model: surface";
+    const std::size_t at = yaml.find(from);
+    if (at == std::string::npos) throw std::runtime_error("no bar_model in the modern robot file");
+    yaml.replace(at, from.size(), "bar_model: hinge");
+    const std::filesystem::path out = std::filesystem::temp_directory_path() /
+                                      ("ubersim-hinge-bar-robot-" + std::to_string(::getpid()) + ".yaml");
+    std::ofstream(out) << yaml;
+    return out.string();
+  }();
+  return file;
+}
+
+INSTANTIATE_TEST_SUITE_P(BarModels, RollerDribbler, ::testing::Values(BarModel::kSurface, BarModel::kHinge),
+                         [](const auto& info) { return info.param == BarModel::kSurface ? "SurfaceBar" : "HingeBar"; });
+
 double Distance(PartsWorld& w) {
   const Vec3 b = w.BallInRobotFrame();
   return std::hypot(b.x() - (w.Front() + w.BallRadius()), b.y());
 }
 
-TEST(RollerDribbler, TouchesBallReportsTheContact) {
-  PartsWorld w;
+TEST_P(RollerDribbler, TouchesBallReportsTheContact) {
+  PartsWorld w(RobotFile());
   w.Run(0.2, std::nullopt, std::nullopt, kDribble);
   EXPECT_FALSE(w.Robot().dribbler_ball_contact) << "the ball is 5 m away";
   w.PlaceBallInMouth();
@@ -44,8 +84,8 @@ TEST(RollerDribbler, TouchesBallReportsTheContact) {
   EXPECT_FALSE(w.Robot().dribbler_ball_contact) << "reset once the ball has gone";
 }
 
-TEST(RollerDribbler, ARobotTakenOffTheFieldReportsNoContact) {
-  PartsWorld w;
+TEST_P(RollerDribbler, ARobotTakenOffTheFieldReportsNoContact) {
+  PartsWorld w(RobotFile());
   w.PlaceBallInMouth();
   w.Run(0.01, std::nullopt, std::nullopt, kDribble);
   ASSERT_TRUE(w.Robot().dribbler_ball_contact);
@@ -58,8 +98,8 @@ TEST(RollerDribbler, ARobotTakenOffTheFieldReportsNoContact) {
   EXPECT_FALSE(w.Robot().kicker_ready);
 }
 
-TEST(RollerDribbler, SpinsTheBallBackAgainstTheRobot) {
-  PartsWorld w;
+TEST_P(RollerDribbler, SpinsTheBallBackAgainstTheRobot) {
+  PartsWorld w(RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   w.Run(0.5, std::nullopt, std::nullopt, kDribble);
@@ -70,8 +110,8 @@ TEST(RollerDribbler, SpinsTheBallBackAgainstTheRobot) {
   EXPECT_LT(Distance(w), 0.002);
 }
 
-TEST(RollerDribbler, DribblingLeavesTheRobotStandingStill) {
-  PartsWorld w;
+TEST_P(RollerDribbler, DribblingLeavesTheRobotStandingStill) {
+  PartsWorld w(RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   const RobotState before = w.Robot();
@@ -83,8 +123,8 @@ TEST(RollerDribbler, DribblingLeavesTheRobotStandingStill) {
   EXPECT_LT(after.twist.linear.norm(), 0.01);
 }
 
-TEST(RollerDribbler, HoldsTheBallThroughADriveAndATurn) {
-  PartsWorld w;
+TEST_P(RollerDribbler, HoldsTheBallThroughADriveAndATurn) {
+  PartsWorld w(RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   w.Run(0.3, std::nullopt, std::nullopt, kDribble);
@@ -106,10 +146,10 @@ TEST(RollerDribbler, HoldsTheBallThroughADriveAndATurn) {
   RecordProperty("hold_worst_m", std::to_string(t.worst));
 }
 
-TEST(RollerDribbler, WithoutTheRollerTheBallIsLostWhenBraking) {
+TEST_P(RollerDribbler, WithoutTheRollerTheBallIsLostWhenBraking) {
   // The same drive with the dribbler off: the ball rolls on when the robot brakes. This is what
   // the hold test above would see if the roller did nothing.
-  PartsWorld w;
+  PartsWorld w(RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   w.Run(1.0 + 1.0 / 6.0 - 1.0 / 12.0, LocalVelocityCommand{1.0, 0, 0}, std::nullopt, 0.0);
@@ -117,9 +157,9 @@ TEST(RollerDribbler, WithoutTheRollerTheBallIsLostWhenBraking) {
   EXPECT_GT(Distance(w), 0.1);
 }
 
-TEST(RollerDribbler, LosesTheBallOnAFastSpin) {
+TEST_P(RollerDribbler, LosesTheBallOnAFastSpin) {
   for (double spin : {8.0, 10.0}) {
-    PartsWorld w;
+    PartsWorld w(RobotFile());
     w.Run(0.2);
     w.PlaceBallInMouth();
     w.Run(0.3, std::nullopt, std::nullopt, kDribble);
@@ -130,8 +170,8 @@ TEST(RollerDribbler, LosesTheBallOnAFastSpin) {
   }
 }
 
-TEST(RollerDribbler, HoldsWhileSpinningSlowly) {
-  PartsWorld w;
+TEST_P(RollerDribbler, HoldsWhileSpinningSlowly) {
+  PartsWorld w(RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   w.Run(0.3, std::nullopt, std::nullopt, kDribble);
@@ -140,8 +180,8 @@ TEST(RollerDribbler, HoldsWhileSpinningSlowly) {
   EXPECT_LT(t.worst, 0.01);
 }
 
-TEST(RollerDribbler, SpeedIsClampedToTheMaximum) {
-  PartsWorld w;
+TEST(RollerDribblerHinge, SpeedIsClampedToTheMaximum) {
+  PartsWorld w(HingeBarRobot());
   w.Run(0.2);
   w.Run(0.5, std::nullopt, std::nullopt, 1e4);
   const NodeImpl* node = w.world->scene().Find("blue/0/dribbler");
@@ -151,7 +191,24 @@ TEST(RollerDribbler, SpeedIsClampedToTheMaximum) {
   EXPECT_NEAR(axle->Rate(), 150.0, 1.0);
 }
 
-TEST(RollerDribbler, The2003RobotAndTheUrdfTwinHoldTheBallToo) {
+TEST(RollerDribblerSurface, SpeedIsClampedToo) {
+  // The surface bar has no axle: a held ball spins as fast with 10⁴ rad/s commanded as with the
+  // maximum, and slower at half of it.
+  auto spin = [](double command) {
+    PartsWorld w;
+    w.Run(0.2);
+    w.PlaceBallInMouth();
+    w.Run(0.5, std::nullopt, std::nullopt, command);
+    return -(w.Robot().pose.orientation.conjugate() * w.BallTwist().angular).y();
+  };
+  const double at_max = spin(kDribble);
+  EXPECT_GT(at_max, 20.0);
+  EXPECT_NEAR(spin(1e4), at_max, 0.01 * at_max);
+  EXPECT_LT(spin(0.5 * kDribble), 0.75 * at_max);
+  EXPECT_EQ(PartsWorld().world->scene().Find("blue/0/dribbler")->FindJoint("axle"), nullptr) << "no hinge";
+}
+
+TEST(RollerDribblerModels, The2003RobotAndTheUrdfTwinHoldTheBallToo) {
   for (const char* file : {k2003Robot, kModernUrdfRobot}) {
     PartsWorld w(file);
     w.Run(0.2);

@@ -70,6 +70,10 @@ struct SurfaceMaterial {
   double soft_cfm = -1.0;         ///< contact CFM; < 0: world default
   double rolling_friction = 0.0;  ///< rolling resistance coefficient (dContactRolling rho), m
   double slip = 0.0;              ///< force-dependent slip (both directions), s/kg
+  /// Velocity of the observing geometry's surface over its own body at the contact point (a
+  /// spinning roller fixed to its body, a conveyor), world frame, m/s. Set by a contact
+  /// observer; the contact then drags the other side along it, up to the friction limit.
+  Vec3 surface_velocity = Vec3::Zero();
 };
 
 /// Which geometries a geometry makes contacts with. Decided before any contact point is
