@@ -324,9 +324,7 @@ void CollisionManager::ForEachCandidatePair(const std::function<void(GeomImpl&, 
 std::vector<std::pair<GeomImpl*, GeomImpl*>> CollisionManager::TouchingPairs() {
   std::vector<std::pair<GeomImpl*, GeomImpl*>> pairs;
   ForEachCandidatePair([&](GeomImpl& a, GeomImpl& b) {
-    if (dCollide(a.id(), b.id(), max_contacts_, scratch_.data(), sizeof(dContactGeom)) > 0) {
-      pairs.emplace_back(&a, &b);
-    }
+    if (FindContacts(a, b) > 0) pairs.emplace_back(&a, &b);
   });
   return pairs;
 }
@@ -397,11 +395,23 @@ void CollisionManager::SweepFastBalls() {
 
 void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }
 
+int CollisionManager::FindContacts(GeomImpl& a, GeomImpl& b) {
+  if (a.prism() && b.prism()) {
+    const int n = CollideUprightPrisms(*a.prism(), a.GetPose(), *b.prism(), b.GetPose(), max_contacts_, scratch_.data());
+    for (int i = 0; i < n; ++i) {
+      scratch_[static_cast<std::size_t>(i)].g1 = a.id();
+      scratch_[static_cast<std::size_t>(i)].g2 = b.id();
+    }
+    if (n >= 0) return n;  // else not both upright: the general test
+  }
+  return SpreadContacts(scratch_, dCollide(a.id(), b.id(), kContactCandidates, scratch_.data(), sizeof(dContactGeom)),
+                        max_contacts_);
+}
+
 void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
   if (AbovePlane(a, b)) return;
   ++stats_.narrow_tests;
-  const int n = SpreadContacts(
-      scratch_, dCollide(a.id(), b.id(), kContactCandidates, scratch_.data(), sizeof(dContactGeom)), max_contacts_);
+  const int n = FindContacts(a, b);
   if (n <= 0) return;
   ++stats_.touching_pairs;
   if (a.is_ball() || b.is_ball()) ball_touching_.emplace_back(&a, &b);

@@ -7,6 +7,7 @@
 #include <exception>
 
 #include "ubersim/error.hpp"
+#include "ubersim/kernel/upright_prism.hpp"
 #include "ubersim/kernel/urdf.hpp"
 
 namespace ubersim::kernel {
@@ -115,43 +116,6 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
   }
 }
 
-namespace {
-
-// The chassis shell: a cylinder of `radius` and `length` (along z, centred) cut flat at
-// x = front_distance, where the ball sits against the dribbler and kicker. A closed triangle
-// mesh, not a convex prism: ODE's convex-plane test returns the first max_contacts vertices below
-// the plane, all on one side of a 33-corner outline, so a chassis resting on the carpet (no
-// ground clearance, or knocked over) tips over. Triangle meshes collide well with every shape the
-// field, ball and robots use (the URDF twin's shell is the same mesh).
-Shape FlatFrontPrism(double radius, double front_distance, double length) {
-  constexpr int kArcSegments = 32;
-  const double cut = std::acos(std::clamp(front_distance / radius, -1.0, 1.0));
-  const double h = 0.5 * length;
-  Shape s;
-  s.kind = Shape::Kind::kTriangleMesh;
-  // Ring i: bottom vertex 2i, top vertex 2i + 1, counter-clockwise seen from above, from the
-  // left end of the flat face (y > 0) round the back to its right end.
-  for (int i = 0; i <= kArcSegments; ++i) {
-    const double a = cut + (2.0 * M_PI - 2.0 * cut) * i / kArcSegments;
-    s.vertices.emplace_back(radius * std::cos(a), radius * std::sin(a), -h);
-    s.vertices.emplace_back(radius * std::cos(a), radius * std::sin(a), h);
-  }
-  const unsigned ring = static_cast<unsigned>(s.vertices.size()) / 2;
-  const unsigned bottom_centre = 2 * ring, top_centre = 2 * ring + 1;
-  s.vertices.emplace_back(0.0, 0.0, -h);
-  s.vertices.emplace_back(0.0, 0.0, h);
-  // Sides (the arc's segments, then the flat face closing the ring), outward and counter-clockwise.
-  for (unsigned i = 0; i < ring; ++i) {
-    const unsigned j = (i + 1) % ring;
-    s.indices.insert(s.indices.end(), {2 * i, 2 * j, 2 * j + 1, 2 * i, 2 * j + 1, 2 * i + 1});
-    s.indices.insert(s.indices.end(), {top_centre, 2 * i + 1, 2 * j + 1});  // top cap, up
-    s.indices.insert(s.indices.end(), {bottom_centre, 2 * j, 2 * i});      // bottom cap, down
-  }
-  return s;
-}
-
-}  // namespace
-
 void Robot::BuildCylinderChassis(const RobotPlacement& placement) {
   const RobotBodyInfo& b = model_->body;
   const double length = b.height - b.ground_clearance;
@@ -165,11 +129,13 @@ void Robot::BuildCylinderChassis(const RobotPlacement& placement) {
   chassis_ = static_cast<BodyImpl*>(&node_->AddBody(chassis));
   GeomSpec shell;
   shell.name = "shell";
-  shell.shape = b.front_distance < b.radius ? FlatFrontPrism(b.radius, b.front_distance, length)
-                                            : Shape::Cylinder(b.radius, length);
+  const FlatFrontPrism prism{b.radius, std::min(b.front_distance, b.radius), 0.5 * length};
+  shell.shape = b.front_distance < b.radius ? FlatFrontPrismMesh(prism) : Shape::Cylinder(b.radius, length);
   shell.material = model_->surface;
   shell.offset.position = Vec3(0, 0, shell_centre - rest_height_);
-  node_->AddGeom(shell, chassis_);
+  // Marked as the prism it is: two upright shells then meet exactly and fast (and two cylinder
+  // shells meet at all: ODE has no cylinder-cylinder test).
+  static_cast<GeomImpl&>(node_->AddGeom(shell, chassis_)).set_prism(prism);
 }
 
 void Robot::BuildUrdfBodies(const RobotPlacement& placement) {

@@ -113,6 +113,9 @@ class CollisionManager {
 
  private:
   void Narrow(GeomImpl& a, GeomImpl& b);
+  // The contacts of a and b into scratch_ (two upright robot shells by their own test, the rest
+  // by ODE's), at most max_contacts_; returns how many.
+  int FindContacts(GeomImpl& a, GeomImpl& b);
   // Makes contact joints for the first n contacts in scratch_ (observers, surfaces, friction).
   void AddContacts(GeomImpl& a, GeomImpl& b, int n);
   // The swept test of every fast ball (SetSweptBallStep).

@@ -11,6 +11,7 @@
 #include "ubersim/component.hpp"
 #include "ubersim/scene.hpp"
 #include "ubersim/kernel/ode_handles.hpp"
+#include "ubersim/kernel/upright_prism.hpp"
 
 // The scene graph (SG): a tree of nodes that own ODE bodies, geometries and joints. Every module
 // but the collision manager reads or changes the world through it.
@@ -78,6 +79,11 @@ class GeomImpl final : public Geom {
   void ClearObservers() { observers_.clear(); }
   /// Contact observers, in the order added.
   const std::vector<ContactHandler>& observers() const { return observers_; }
+  /// Marks a robot shell (a triangle mesh) as this upright-standing prism, so two shells meet in
+  /// CollideUprightPrisms rather than ODE's mesh-against-mesh test.
+  void set_prism(const FlatFrontPrism& prism) { prism_ = prism; }
+  /// The prism this shell is, if marked.
+  const std::optional<FlatFrontPrism>& prism() const { return prism_; }
   /// Marks the geometry as the ball (contacts report other_is_ball).
   void set_is_ball(bool b) { is_ball_ = b; }
   bool is_ball() const { return is_ball_; }  ///< this is the ball
@@ -89,6 +95,7 @@ class GeomImpl final : public Geom {
   Shape shape_;
   SurfaceMaterial material_;
   std::optional<Vec3> friction_axis_;
+  std::optional<FlatFrontPrism> prism_;
   BodyImpl* body_;
   bool collides_;
   ContactScope scope_;
