@@ -78,6 +78,8 @@ class World {
   const WorldModel& model() const { return model_; }
   /// The scene graph.
   SceneGraph& scene() { return *scene_; }
+  /// The scene graph, read-only (state checks).
+  const SceneGraph& scene() const { return *scene_; }
   /// The collision manager.
   CollisionManager& collision() { return *collision_; }
   /// The ball body.
