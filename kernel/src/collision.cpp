@@ -155,6 +155,7 @@ void MaterialTable::SetPair(const std::string& a, const std::string& b,
   SurfaceMaterial s = surface;
   s.name = a < b ? a + "|" + b : b + "|" + a;
   pairs_[std::minmax(a, b)] = s;
+  ++version_;
 }
 
 SurfaceMaterial MaterialTable::Resolve(const SurfaceMaterial& a, const SurfaceMaterial& b) const {
@@ -185,11 +186,7 @@ CollisionManager::CollisionManager(SceneGraph& graph, Broadphase broadphase, int
       max_contacts_(std::clamp(max_contacts, 1, 64)),
       contacts_(dJointGroupCreate(0)),
       scratch_(static_cast<std::size_t>(kContactCandidates)) {
-  graph_.SetGeomListener(
-      [this](GeomImpl& g) {
-        if (space_) dSpaceAdd(space_.get(), g.id());
-      },
-      nullptr);
+  graph_.SetGeomListener([this](GeomImpl& g) { File(g); }, nullptr);
   SetBroadphase(broadphase);
 }
 
@@ -218,10 +215,22 @@ void CollisionManager::SetBroadphase(Broadphase broadphase) {
   } else if (broadphase == Broadphase::kSweepAndPrune) {
     space_.reset(dSweepAndPruneSpaceCreate(nullptr, dSAP_AXES_XYZ));
   }
+  planes_.clear();
+  planes_only_.clear();
   if (space_) {
     dSpaceSetCleanup(space_.get(), 0);  // the scene graph owns the geometries
-    graph_.Root().ForEachGeom([this](GeomImpl& g) { dSpaceAdd(space_.get(), g.id()); });
+    graph_.Root().ForEachGeom([this](GeomImpl& g) { File(g); });
   }
+}
+
+void CollisionManager::File(GeomImpl& g) {
+  if (!space_) return;
+  if (g.is_plane()) planes_.push_back(&g);
+  if (g.scope() == ContactScope::kPlanesOnly && !g.is_plane()) {
+    planes_only_.push_back(&g);
+    return;
+  }
+  dSpaceAdd(space_.get(), g.id());
 }
 
 namespace {
@@ -314,6 +323,11 @@ void CollisionManager::ForEachPair(F& f) {
   std::function<void(GeomImpl&, GeomImpl&)> call = [&f](GeomImpl& a, GeomImpl& b) { f(a, b); };
   SpaceCallbackData data{&call};
   dSpaceCollide(space_.get(), &data, &SpaceNearCallback);
+  for (GeomImpl* g : planes_only_) {
+    for (GeomImpl* plane : planes_) {
+      if (MayCollide(*g, *plane)) f(*g, *plane);
+    }
+  }
 }
 
 void CollisionManager::ForEachCandidatePair(const std::function<void(GeomImpl&, GeomImpl&)>& f) {
@@ -418,14 +432,26 @@ void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
   AddContacts(a, b, n);
 }
 
+const SurfaceMaterial& CollisionManager::PairSurface(const GeomImpl& a, const GeomImpl& b) {
+  auto [it, fresh] = surfaces_.try_emplace({&a, &b});
+  CachedSurface& c = it->second;
+  if (fresh || c.a_version != a.material_version() || c.b_version != b.material_version() ||
+      c.table_version != materials_.version()) {
+    c = CachedSurface{a.material_version(), b.material_version(), materials_.version(),
+                      materials_.Resolve(a.Material(), b.Material())};
+  }
+  return c.surface;
+}
+
 void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n) {
-  const SurfaceMaterial pair_surface = materials_.Resolve(a.Material(), b.Material());
+  const SurfaceMaterial& pair_surface = PairSurface(a, b);
   // The geometry with directional friction (an omni wheel) decides the friction direction.
   const GeomImpl* directional = a.friction_axis() ? &a : (b.friction_axis() ? &b : nullptr);
   dWorldID world = graph_.world();
   for (int i = 0; i < n; ++i) {
     const dContactGeom& cg = scratch_[static_cast<std::size_t>(i)];
-    SurfaceMaterial surface = pair_surface;
+    SurfaceMaterial& surface = contact_surface_;
+    surface = pair_surface;
     bool accept = true;
     const Vec3 position = ToVec3(cg.pos);
     const Vec3 normal = ToVec3(cg.normal);  // points out of b (g2) into a (g1)

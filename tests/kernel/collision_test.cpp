@@ -233,6 +233,45 @@ TEST(CollisionManager, ObserversSeeContactsAndMayDropThem) {
   EXPECT_NEAR(normal.z(), 1.0, 1e-9);  // from the carpet into the sphere
 }
 
+// Surfaces are cached per pair of geometries: a changed material or material table must show in
+// the very next contacts.
+TEST(CollisionManager, AChangedMaterialOrTableShowsInTheNextContacts) {
+  SmallScene s;
+  CollisionManager cm(s.graph, Broadphase::kSweepAndPrune, 4);
+  SurfaceMaterial carpet;
+  carpet.name = "carpet";
+  carpet.mu = 0.9;
+  s.graph.Root().AddChild("field").AddGeom(GeomSpec{"carpet", Shape::Plane(Vec3::UnitZ(), 0), {}, carpet, {}, true},
+                                           nullptr);
+  SceneNode& n = s.graph.Root().AddChild("thing");
+  BodySpec b;
+  b.name = "b";
+  b.mass = MassSpec::Solid(Shape::Sphere(0.05), 0.1);
+  b.pose.position = Vec3(0, 0, 0.049);
+  Body& body = n.AddBody(b);
+  SurfaceMaterial rubber;
+  rubber.name = "rubber";
+  rubber.mu = 0.1;
+  auto& g = static_cast<GeomImpl&>(n.AddGeom(GeomSpec{"s", Shape::Sphere(0.05), {}, rubber, {}, true}, &body));
+  double mu = -1;
+  g.AddObserver([&](const Contact&, SurfaceMaterial& m, bool&) { mu = m.mu; });
+  auto collide = [&] {
+    mu = -1;
+    cm.Collide();
+    cm.ClearContacts();
+    return mu;
+  };
+  EXPECT_NEAR(collide(), 0.3, 1e-12);  // sqrt(0.9 · 0.1)
+  EXPECT_NEAR(collide(), 0.3, 1e-12);  // cached
+  rubber.mu = 0.4;
+  g.SetMaterial(rubber);
+  EXPECT_NEAR(collide(), 0.6, 1e-12);  // sqrt(0.9 · 0.4)
+  SurfaceMaterial pair;
+  pair.mu = 0.25;
+  cm.materials().SetPair("rubber", "carpet", pair);
+  EXPECT_DOUBLE_EQ(collide(), 0.25);
+}
+
 // A body whose box lies wholly above the carpet is never narrow-tested against it (a trimesh
 // chassis would test every vertex); one that reaches down to it is.
 std::size_t NarrowTestsWithBoxAt(double z) {

@@ -167,9 +167,10 @@ class OmniForceDrive final : public ubersim::Drive {
     ubersim::DriveFeedback f;
     const ubersim::Body& chassis = ctx_->Chassis();
     const ubersim::Pose pose = chassis.GetPose();
+    const Eigen::Matrix3d rotation = pose.orientation.toRotationMatrix();
     Eigen::VectorXd speeds(static_cast<Eigen::Index>(wheels_.size()));
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
-      const Frame fr = WheelFrame(pose, wheels_[i]);
+      const Frame fr = WheelFrame(pose.position, rotation, wheels_[i]);
       f.wheel_speeds.push_back(chassis.PointVelocity(fr.contact).dot(fr.rolling) / wheel_radius_);
       speeds(static_cast<Eigen::Index>(i)) = f.wheel_speeds.back();
     }
@@ -213,11 +214,11 @@ class OmniForceDrive final : public ubersim::Drive {
     Vec3 axle;      // unit, in the carpet plane, across the rolling direction
   };
 
-  Frame WheelFrame(const ubersim::Pose& pose, const Wheel& w) const {
+  Frame WheelFrame(const Vec3& position, const Eigen::Matrix3d& rotation, const Wheel& w) const {
     const Vec3 up = Vec3::UnitZ();  // the carpet's normal
     Frame f;
-    f.contact = pose.Transform(w.centre) - up * wheel_radius_;
-    f.rolling = pose.orientation * w.tangent;
+    f.contact = position + rotation * w.centre - up * wheel_radius_;
+    f.rolling = rotation * w.tangent;
     f.rolling -= up * up.dot(f.rolling);
     f.rolling.normalize();
     f.axle = up.cross(f.rolling);
@@ -234,23 +235,33 @@ class OmniForceDrive final : public ubersim::Drive {
   // (0.54 on the modern robot) and settles in a few steps (see Configure).
   void PushWheels(const Eigen::VectorXd& targets, double dt) {
     ubersim::Body& chassis = ctx_->Chassis();
+    // One read of the chassis' state for all wheels; the wheels' forces are summed into one
+    // force and one torque about the centre of mass (the same as applying each at its point).
     const ubersim::Pose pose = chassis.GetPose();
+    const ubersim::Twist twist = chassis.GetTwist();
+    const Eigen::Matrix3d rotation = pose.orientation.toRotationMatrix();
     const double n = static_cast<double>(wheels_.size());
     const double load = chassis.Mass() / n * ctx_->Gravity().norm();  // N: static, no load transfer
     const double share = chassis.Mass() / n * servo_scale_;            // kg each wheel moves
     const double motor_force = max_torque_ / wheel_radius_;     // N at the contact
+    Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
       const Wheel& w = wheels_[i];
-      const Frame fr = WheelFrame(pose, w);
+      const Frame fr = WheelFrame(pose.position, rotation, w);
       if (fr.contact.z() > kGripHeight) continue;  // a wheel in the air pushes nothing
-      const Vec3 v = chassis.PointVelocity(fr.contact);
+      const Vec3 arm = fr.contact - pose.position;
+      const Vec3 v = twist.linear + twist.angular.cross(arm);  // the chassis' velocity at the contact
       const double surface_speed = targets(static_cast<Eigen::Index>(i)) * wheel_radius_;
       const double drive_limit = std::min(motor_force, w.mu_roll * load);
       const double drive = std::clamp(share * (surface_speed - v.dot(fr.rolling)) / dt, -drive_limit, drive_limit);
       const double roller_limit = w.mu_axle * load;
       const double roller = std::clamp(-share * v.dot(fr.axle) / dt, -roller_limit, roller_limit);
-      chassis.AddForceAtPoint(fr.rolling * drive + fr.axle * roller, fr.contact);
+      const Vec3 push = fr.rolling * drive + fr.axle * roller;
+      force += push;
+      torque += arm.cross(push);
     }
+    chassis.AddForce(force);
+    chassis.AddTorque(torque);
   }
 
   // The command as (forward, left, angular) in the robot frame, within the speed limits.

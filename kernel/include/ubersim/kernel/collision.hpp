@@ -2,10 +2,12 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -42,6 +44,8 @@ class MaterialTable {
  public:
   /// Sets the surface used when materials `a` and `b` touch (either order).
   void SetPair(const std::string& a, const std::string& b, const SurfaceMaterial& surface);
+  /// Counts SetPair calls (surfaces resolved before a change are stale after it).
+  std::uint64_t version() const { return version_; }
   /// The surface for two touching materials: the table entry when there is one, else the
   /// combination: mu and mu2 geometric means, bounce and bounce velocity the larger, ERP the
   /// smaller and CFM the larger of those set, rolling friction and slip the larger.
@@ -61,6 +65,7 @@ class MaterialTable {
     }
   };
   std::map<std::pair<std::string, std::string>, SurfaceMaterial, NamePairLess> pairs_;
+  std::uint64_t version_ = 0;
 };
 
 /// Counters of the last Collide() call.
@@ -122,6 +127,21 @@ class CollisionManager {
   void SweepFastBalls();
   template <typename F>
   void ForEachPair(F& f);
+  // Files a geometry: into the ODE space, or, when it touches planes only, beside it.
+  void File(GeomImpl& g);
+  // The resolved surface of two touching geometries, cached per pair while neither material
+  // nor the table changes (resolving compares and joins names: every contact, every step).
+  const SurfaceMaterial& PairSurface(const GeomImpl& a, const GeomImpl& b);
+
+  struct CachedSurface {
+    std::uint64_t a_version, b_version, table_version;
+    SurfaceMaterial surface;
+  };
+  struct PairHash {
+    std::size_t operator()(const std::pair<const GeomImpl*, const GeomImpl*>& p) const {
+      return std::hash<const void*>()(p.first) * 31 + std::hash<const void*>()(p.second);
+    }
+  };
 
   SceneGraph& graph_;
   Broadphase broadphase_;
@@ -136,6 +156,14 @@ class CollisionManager {
   OdeGeom ray_;           // the swept test's ray, reused
   std::vector<GeomImpl*> balls_;  // the balls, found at the first swept test
   bool balls_found_ = false;
+  // With an ODE space: the planes, and the geometries that touch planes only (wheel ground
+  // contacts, supports: nearly half a robot's). Those stay out of the space, where they would
+  // be sorted and paired with everything near them each step only to be refused, and meet the
+  // planes directly.
+  std::vector<GeomImpl*> planes_;
+  std::vector<GeomImpl*> planes_only_;
+  std::unordered_map<std::pair<const GeomImpl*, const GeomImpl*>, CachedSurface, PairHash> surfaces_;
+  SurfaceMaterial contact_surface_;  // reused per contact: no allocation once warm
 };
 
 }  // namespace ubersim::kernel

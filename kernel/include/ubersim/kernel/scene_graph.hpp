@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -55,7 +56,12 @@ class GeomImpl final : public Geom {
   SceneNode& Owner() const override;
   const Shape& GetShape() const override { return shape_; }
   const SurfaceMaterial& Material() const override { return material_; }
-  void SetMaterial(const SurfaceMaterial& material) override { material_ = material; }
+  void SetMaterial(const SurfaceMaterial& material) override {
+    material_ = material;
+    ++material_version_;
+  }
+  /// Counts SetMaterial calls (the collision manager's surface cache checks it).
+  std::uint64_t material_version() const { return material_version_; }
   Pose GetPose() const override;
   void SetCollides(bool collides) override { collides_ = collides; }
 
@@ -94,6 +100,7 @@ class GeomImpl final : public Geom {
   std::string name_;
   Shape shape_;
   SurfaceMaterial material_;
+  std::uint64_t material_version_ = 0;
   std::optional<Vec3> friction_axis_;
   std::optional<FlatFrontPrism> prism_;
   BodyImpl* body_;
