@@ -30,6 +30,7 @@
 #include "ubersim/validation/scenarios.hpp"
 #include "batch.hpp"
 #include "bench.hpp"
+#include "soak.hpp"
 
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
@@ -45,6 +46,7 @@ constexpr int kExitUsage = 2;
 constexpr int kExitModel = 3;
 constexpr int kExitPlugin = 4;
 constexpr int kExitOutOfBand = 5;
+constexpr int kExitSoakFailed = 6;
 
 // The one piece of process-wide state: set by SIGINT/SIGTERM, read by the run loop.
 std::atomic<bool>& StopRequested() {
@@ -65,10 +67,12 @@ const char* kTopHelp =
     "  validate-physics run the physics validation scenarios, write the report and plots\n"
     "  bench [WORLD…]   step worlds as fast as possible and measure them against bare ODE\n"
     "  batch [WORLD…]   run many seeded worlds at once on worker processes\n"
+    "  soak [WORLD]     run a world for long under random play and teleports, checking its state\n"
     "\n"
     "`ubersim <command> --help` describes a command's options.\n"
     "exit codes: 0 ok, 1 runtime error, 2 bad usage, 3 invalid model file, 4 plugin error,\n"
-    "            5 a validated physics number outside its band\n";
+    "            5 a validated physics number outside its band, 6 soak: a state-check finding\n"
+    "            or memory growth\n";
 
 std::vector<fs::path> ToPaths(const std::vector<std::string>& v) {
   return std::vector<fs::path>(v.begin(), v.end());
@@ -701,6 +705,116 @@ int BatchCommand(const std::vector<std::string>& args) {
   }
 }
 
+int SoakCommand(const std::vector<std::string>& args) {
+  po::options_description desc(
+      "usage: ubersim soak [WORLD] [options]\n\n"
+      "Runs WORLD (a file or a shipped world's name; default div-a) headless and as fast as\n"
+      "possible for --duration simulated seconds under seeded random play and random teleports\n"
+      "(robots and the ball onto other robots, into walls and goals, at up to 3 m/s and 6.5 m/s),\n"
+      "and checks the state every simulated second: no NaN or infinite value, nothing outside\n"
+      "the walls or under the carpet, no robot inside another, nothing impossibly fast; and the\n"
+      "resident memory stays flat after a warm-up. Prints each finding with its simulated time,\n"
+      "progress, and a summary. Exit code 6 on any finding or memory growth of 5 % or more.\n\noptions");
+  double duration = 3600.0, interval = 0.5, wall_overlap = 0.5;
+  std::uint64_t seed = 1;
+  PhysicsFlags physics_flags;
+  std::string world_arg = "div-a", robot;
+  std::vector<std::string> plugin_paths;
+  desc.add_options()("help,h", "this help")
+      ("duration", po::value<double>(&duration)->default_value(duration), "simulated seconds")
+      ("seed", po::value<std::uint64_t>(&seed)->default_value(seed), "seed of the random play and the teleports")
+      ("teleport-interval", po::value<double>(&interval)->default_value(interval), "mean simulated seconds between teleports")
+      ("wall-overlap", po::value<double>(&wall_overlap)->default_value(wall_overlap),
+       "how far into a wall a robot is teleported, as a share of the wall's thickness (0..1)")
+      ("robot", po::value<std::string>(&robot), "put this robot model file in every robot's place")
+      ("quiet,q", "no progress lines")
+      ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
+  physics_flags.AddTo(desc);
+  po::options_description hidden;
+  hidden.add_options()("world", po::value<std::string>(&world_arg));
+  po::positional_options_description pos;
+  pos.add("world", 1);
+  po::options_description all;
+  all.add(desc).add(hidden);
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(args).options(all).positional(pos).run(), vm);
+    po::notify(vm);
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim soak: " << e.what() << "\n\n" << desc << "\n";
+    return kExitUsage;
+  }
+  if (vm.count("help")) {
+    std::cout << desc << "\n";
+    return kExitOk;
+  }
+  if (!(duration > 0) || !(interval > 0) || !(wall_overlap >= 0 && wall_overlap <= 1)) {
+    std::cerr << "ubersim soak: --duration and --teleport-interval must be > 0, --wall-overlap 0..1\n";
+    return kExitUsage;
+  }
+  PhysicsOverrides physics;
+  if (!physics_flags.Read(vm, "soak", physics)) return kExitUsage;
+  try {
+    const fs::path file = WorldFileOf(world_arg);
+    PluginRegistry registry(PluginSearchPath({file}, plugin_paths));
+    const ModelLoader loader(ModelLoader::DefaultSchemaDir(), LookupIn(registry));
+    WorldModel model = bench::LoadTrialWorld(loader, file, physics,
+                                             vm.count("robot") ? std::optional<std::string>(robot) : std::nullopt);
+    model.transports.clear();  // headless
+    // Plugins' warnings and errors are shown as they come; none is expected.
+    StreamLog log(std::cerr, LogLevel::kWarning);
+    World world(model, registry, log, /*start_transports=*/false);
+    soak::SoakOptions options;
+    options.sim_seconds = duration;
+    options.seed = seed;
+    options.teleport_interval = interval;
+    options.wall_overlap = wall_overlap;
+    std::printf("soak %s (%s): %.0f s simulated, seed %llu, %zu robots, physics step %.2f ms\n", model.name.c_str(),
+                file.string().c_str(), duration, static_cast<unsigned long long>(seed), model.robots.size(),
+                model.physics.step * 1e3);
+    std::fflush(stdout);
+    const bool quiet = vm.count("quiet") > 0;
+    const bool tty = isatty(STDERR_FILENO) != 0;
+    double next_line = 0;
+    const auto report = soak::RunSoak(
+        world, options,
+        [&](const soak::SoakProgress& p) {
+          if (quiet) return;
+          char line[200];
+          std::snprintf(line, sizeof line, "sim %7.0f / %.0f s | wall %7.1f s | %5.2f× real time | %6.1f MB | %lld findings",
+                        p.sim_time, p.sim_seconds, p.wall_seconds, p.sim_time / std::max(p.wall_seconds, 1e-9), p.rss_mb,
+                        static_cast<long long>(p.findings));
+          if (tty) {
+            std::fprintf(stderr, "\r%s\033[K", line);
+          } else if (p.sim_time >= next_line) {  // a log file: one line a simulated minute
+            std::fprintf(stderr, "%s\n", line);
+            next_line = p.sim_time + 60.0;
+          }
+          std::fflush(stderr);
+        },
+        [&](const soak::SoakFinding& f) {
+          if (tty && !quiet) std::fprintf(stderr, "\r\033[K");
+          std::printf("t = %.3f s: %s: %s\n", f.sim_time, ToString(f.violation.issue), f.violation.Describe().c_str());
+          std::fflush(stdout);
+        });
+    if (tty && !quiet) std::fprintf(stderr, "\r\033[K");
+    std::cout << soak::FormatSummary(report);
+    return report.Pass() ? kExitOk : kExitSoakFailed;
+  } catch (const ModelError& e) {
+    std::cerr << "ubersim soak: invalid model: " << e.what() << "\n";
+    return kExitModel;
+  } catch (const PluginLoadError& e) {
+    std::cerr << "ubersim soak: plugin error: " << e.what() << "\n";
+    return kExitPlugin;
+  } catch (const PluginError& e) {
+    std::cerr << "ubersim soak: plugin error: " << e.what() << "\n";
+    return kExitPlugin;
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim soak: " << e.what() << "\n";
+    return kExitRuntime;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -722,6 +836,7 @@ int main(int argc, char** argv) {
   if (command == "validate-physics") return ValidatePhysicsCommand(args);
   if (command == "bench") return BenchCommand(args);
   if (command == "batch") return BatchCommand(args);
+  if (command == "soak") return SoakCommand(args);
   std::cerr << "ubersim: unknown command '" << command << "'\n\n" << kTopHelp;
   return kExitUsage;
 }

@@ -1,0 +1,163 @@
+// SPDX-License-Identifier: Apache-2.0
+// `ubersim soak`'s parts on Div A: the random teleports put things where they say, a run is
+// deterministic for a seed, and a run reports what the state checks find (with the time, the
+// object and the values). The long run itself is `soak_div_a_short` (CMakeLists.txt).
+#include <cmath>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "soak.hpp"
+#include "teleports.hpp"
+#include "ubersim/kernel/field_builder.hpp"
+#include "ubersim/kernel/logging.hpp"
+#include "ubersim/kernel/model.hpp"
+#include "ubersim/kernel/plugin_registry.hpp"
+#include "ubersim/kernel/state_check.hpp"
+
+namespace ubersim::kernel::soak {
+namespace {
+
+struct DivA : ::testing::Test {
+  std::ostringstream text;
+  StreamLog log{text, LogLevel::kWarning};
+  PluginRegistry registry{{UBERSIM_PLUGIN_BUILD_DIR}};
+  ModelLoader loader{ModelLoader::DefaultSchemaDir(),
+                     [this](PluginKind k, const std::string& id) { return registry.Find(k, id).schema_json; }};
+
+  std::unique_ptr<World> Make() {
+    WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-a.yaml");
+    model.transports.clear();
+    return std::make_unique<World>(model, registry, log, false);
+  }
+};
+
+// How deep the most overlapping pair involving `who` is right now, m (negative: apart).
+double DeepestOverlap(const World& world, const std::string& who) {
+  StateCheckOptions o;
+  o.finite = o.speed = o.carpet = o.walls = false;
+  o.limits.robot_penetration = o.limits.ball_penetration = 0.0;
+  double deepest = -1.0;
+  for (const StateViolation& v : CheckState(world, o)) {
+    if (v.object.name == who || (v.other && v.other->name == who)) deepest = std::max(deepest, v.value);
+  }
+  return deepest;
+}
+
+std::string Name(const PositionEvent& e) {
+  return e.target.is_ball ? "ball" : std::string("robot ") + ToString(e.target.robot.team) + " " + std::to_string(e.target.robot.id);
+}
+
+TEST_F(DivA, EachTeleportPutsItsObjectWhereItSaysAndNeverWhereContactsCannotPartThem) {
+  auto world = Make();
+  RandomTeleports teleports(*world, 5, 0.5);
+  const FieldModel& field = *world->model().field;
+  for (int k = 0; k < kTeleportKinds; ++k) {
+    const auto kind = static_cast<TeleportKind>(k);
+    int overlapping = 0, made = 0;
+    for (int i = 0; i < 20; ++i) {
+      std::optional<PositionEvent> posted;
+      teleports.SetObserver([&](const char*, const PositionEvent& e) { posted = e; });
+      teleports.Teleport(kind);
+      world->ProcessEvents();
+      if (!posted) continue;
+      ++made;
+      const std::string who = Name(*posted);
+      EXPECT_EQ(teleports.LastMoved(posted->target), world->clock().time_ns());
+      ASSERT_TRUE(posted->position && posted->velocity);
+      EXPECT_TRUE(InsideWalls(field, *posted->position, 0.0)) << ToString(kind) << ": " << who;
+      const double speed = posted->velocity->norm();
+      EXPECT_LE(speed, posted->target.is_ball ? 6.5 + 1e-9 : 3.0 + 1e-9) << ToString(kind);
+      // Never the ball's centre inside a robot: a hull is hollow to the collision code.
+      for (const RobotState& r : world->Snapshot().robots) {
+        EXPECT_GT((r.pose.position - world->Snapshot().ball.pose.position).head<2>().norm(), 0.07 - 1e-9)
+            << ToString(kind) << ": the ball inside robot " << r.id.id;
+      }
+      if (DeepestOverlap(*world, who) > 0.0) ++overlapping;
+      // Apart again for the next one.
+      teleports.Replace(posted->target);
+      world->ProcessEvents();
+    }
+    EXPECT_GE(made, 15) << ToString(kind);
+    EXPECT_EQ(teleports.counts()[k], made) << ToString(kind);
+    if (kind == TeleportKind::kRobotAnywhere || kind == TeleportKind::kBallShot) continue;  // free spots
+    // Onto a robot, the flat fronts may just miss each other; into walls and onto robots the
+    // ball and robots always overlap.
+    const int expected = kind == TeleportKind::kRobotOntoRobot ? made / 2 : made;
+    EXPECT_GE(overlapping, expected) << ToString(kind) << " should overlap what it is put onto or into";
+  }
+}
+
+TEST_F(DivA, TheSameSeedGivesTheSameRunAnotherSeedAnother) {
+  SoakOptions o;
+  o.sim_seconds = 2.0;
+  o.teleport_interval = 0.2;
+  auto run = [&](std::uint64_t seed) {
+    auto world = Make();
+    o.seed = seed;
+    return RunSoak(*world, o, nullptr, nullptr);
+  };
+  const SoakReport a = run(3), b = run(3), c = run(4);
+  EXPECT_EQ(a.state_hash, b.state_hash);
+  EXPECT_EQ(a.teleports, b.teleports);
+  EXPECT_NE(a.state_hash, c.state_hash);
+  std::int64_t teleported = 0;
+  for (std::int64_t n : a.teleports) teleported += n;
+  EXPECT_GT(teleported, 4);  // about 10 expected
+  EXPECT_EQ(a.steps, 2000);
+  EXPECT_EQ(a.checks, 2);
+}
+
+TEST_F(DivA, ARunReportsEachFindingWithItsTimeAndObjectAndPutsTheObjectBack) {
+  auto world = Make();
+  SoakOptions o;
+  o.sim_seconds = 2.0;
+  o.warmup = 0.0;
+  // Wheels and the ball rest a fraction of a millimetre in the carpet: a limit of -1 mm flags
+  // each robot and the ball. Only that check runs, so nothing else is found.
+  o.checks.limits.carpet_penetration = -0.001;
+  o.checks.finite = o.checks.speed = o.checks.walls = o.checks.overlap = false;
+  std::vector<SoakFinding> seen;
+  int progress_calls = 0;
+  const SoakReport r = RunSoak(*world, o, [&](const SoakProgress& p) {
+    ++progress_calls;
+    EXPECT_GT(p.rss_mb, 0.0);
+  }, [&](const SoakFinding& f) { seen.push_back(f); });
+  EXPECT_EQ(progress_calls, 2);
+  ASSERT_EQ(r.finding_count, static_cast<std::int64_t>(seen.size()));
+  EXPECT_EQ(r.finding_count, 2 * 23) << "the ball and every robot, at each of the two checks";
+  EXPECT_EQ(r.by_issue[static_cast<int>(StateIssue::kUnderCarpet)], r.finding_count);
+  EXPECT_EQ(r.replaced, r.finding_count);
+  EXPECT_DOUBLE_EQ(seen.front().sim_time, 1.0);
+  EXPECT_EQ(seen.front().violation.object.name, "ball");
+  EXPECT_EQ(seen[1].violation.object.name, "robot blue 0");
+  EXPECT_NE(seen[1].violation.part.find("carpet_contact"), std::string::npos) << seen[1].violation.part;
+  EXPECT_EQ(seen.back().violation.object.name, "robot yellow 10");
+  EXPECT_DOUBLE_EQ(seen.back().sim_time, 2.0);
+  EXPECT_FALSE(r.Pass());
+  const std::string summary = FormatSummary(r);
+  EXPECT_NE(summary.find("findings: 46 (under the carpet 46)"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("verdict: FAIL"), std::string::npos) << summary;
+}
+
+TEST_F(DivA, MemoryIsJudgedAfterTheWarmUp) {
+  auto world = Make();
+  SoakOptions o;
+  o.sim_seconds = 3.0;
+  o.warmup = 2.0;
+  const SoakReport r = RunSoak(*world, o, nullptr, nullptr);
+  EXPECT_DOUBLE_EQ(r.warmup_seconds, 2.0);
+  EXPECT_GT(r.rss_warm_mb, 0.0);
+  EXPECT_GE(r.rss_peak_mb, r.rss_end_mb);
+  EXPECT_NEAR(r.rss_growth, r.rss_end_mb / r.rss_warm_mb - 1.0, 1e-12);
+  // Not judged when the run ends inside the warm-up.
+  auto other = Make();
+  o.warmup = 10.0;
+  const SoakReport early = RunSoak(*other, o, nullptr, nullptr);
+  EXPECT_EQ(early.rss_warm_mb, 0.0);
+  EXPECT_EQ(early.rss_growth, 0.0);
+  EXPECT_NE(FormatSummary(early).find("memory: not judged"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ubersim::kernel::soak
