@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -46,6 +47,13 @@ std::string CpuModel() {
 }
 
 double Seconds(std::int64_t ns) { return static_cast<double>(ns) * 1e-9; }
+
+// CPU time this thread has used, s.
+double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 StepTimings Minus(const StepTimings& a, const StepTimings& b) {
   return StepTimings{a.events_ns - b.events_ns,       a.plugins_ns - b.plugins_ns,
@@ -191,6 +199,8 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
     // both worlds drive the same way and make about the same contacts.
     const StepTimings before = world.timings();
     SteadyClock::duration kernel_time{}, baseline_time{};
+    const double cpu_start = ThreadCpuSeconds();
+    const auto loop_start = SteadyClock::now();
     for (std::int64_t i = 0; i < steps; ++i) {
       const bool ball_moved = play.BeforeStep();
       const auto t0 = SteadyClock::now();
@@ -209,6 +219,8 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
         if (progress) progress(r.world, static_cast<double>(i) / static_cast<double>(steps));
       }
     }
+    const double loop_wall = std::chrono::duration<double>(SteadyClock::now() - loop_start).count();
+    if (loop_wall > 0) r.cpu_share = std::clamp((ThreadCpuSeconds() - cpu_start) / loop_wall, 0.01, 1.0);
     r.wall_seconds = std::chrono::duration<double>(kernel_time).count();
     const StepTimings t = Minus(world.timings(), before);
     r.sim_seconds = world.clock().seconds();
@@ -236,6 +248,14 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
   return results;
 }
 
+namespace {
+std::string Fixed1(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f", x);
+  return b;
+}
+}  // namespace
+
 std::string FormatTable(const std::vector<BenchResult>& results) {
   std::ostringstream out;
   char line[512];
@@ -257,6 +277,15 @@ std::string FormatTable(const std::vector<BenchResult>& results) {
                   100 * r.split.plugins, 100 * r.split.perception, 100 * r.split.transports, 100 * r.split.events,
                   100 * r.split.other,
                   r.rss_peak_mb, baseline, overhead);
+    out << line;
+  }
+  for (const BenchResult& r : results) {
+    if (r.cpu_share >= 0.95) continue;
+    std::snprintf(line, sizeof line,
+                  "%s: the bench thread was on a CPU %.0f %% of the time (other work on the machine): by CPU "
+                  "time %.1f× real time%s\n",
+                  r.world.c_str(), 100 * r.cpu_share, r.real_time_factor / r.cpu_share,
+                  r.baseline ? (", bare ODE " + Fixed1(r.baseline_real_time_factor / r.cpu_share) + "×").c_str() : "");
     out << line;
   }
   return out.str();
@@ -284,6 +313,14 @@ std::string FormatMarkdown(const std::vector<BenchResult>& results, const std::s
                   100 * r.split.events,
                   100 * r.split.other, r.rss_peak_mb, baseline, overhead);
     out << line;
+  }
+  for (const BenchResult& r : results) {
+    if (r.cpu_share >= 0.95) continue;
+    out << "\n" << r.world << ": the bench thread was on a CPU " << Fixed1(100 * r.cpu_share)
+        << " % of the time (other work on the machine): by CPU time " << Fixed1(r.real_time_factor / r.cpu_share)
+        << "× real time";
+    if (r.baseline) out << ", bare ODE " << Fixed1(r.baseline_real_time_factor / r.cpu_share) << "×";
+    out << ".\n";
   }
   return out.str();
 }

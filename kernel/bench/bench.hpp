@@ -57,6 +57,10 @@ struct BenchResult {
   double baseline_wall_seconds = 0;       ///< bare ODE, same steps, same motor commands
   double baseline_real_time_factor = 0;   ///< bare ODE
   double kernel_overhead = 0;  ///< kernel wall / baseline wall − 1
+  /// Share of the run's wall time the bench thread was on a CPU (its CPU time over its wall
+  /// time): under 1 when other work shared the machine. The wall-time figures then read low by
+  /// this share; divided by it they are what the step costs in CPU time.
+  double cpu_share = 1.0;
 };
 
 /// Drives every robot of a world with seeded random commands (waypoints across the field at up
