@@ -28,9 +28,9 @@ struct SoakOptions {
   /// (docs/reliability.md).
   double wall_overlap = 0.5;
   /// Simulated seconds after a teleport during which the teleported object (and a robot it was
-  /// put onto) may still overlap others: the physics needs a few steps to push them apart. ERP
-  /// 0.2 and a 10 m/s correcting velocity part a 0.18 m overlap within about 20 ms at 1 ms steps;
-  /// 0.25 s is ten times that, and a robot still inside another after it is a failure.
+  /// put onto) may still overlap others: the physics needs a few steps to push them apart. The
+  /// shipped worlds undo penetrations at up to 3 m/s, which parts a 0.18 m overlap within about
+  /// 60 ms; 0.25 s is four times that, and a robot still inside another after it is a failure.
   double grace = 0.25;
   /// Memory is judged from this simulated time on, s (< 0: a fifth of the run, at most 300 s).
   /// Until then the process's memory climbs to its working size: ODE's step arena and the
