@@ -4,7 +4,10 @@
 #   ./setup.sh                 install + build + run models/worlds/div-b.yaml in real time (Ctrl-C stops)
 #   ./setup.sh --no-run        install + build only
 #   ./setup.sh --install-only  install only
-# Environment: BUILD_DIR (default build), BUILD_TYPE (default RelWithDebInfo), JOBS (default nproc).
+#   ./setup.sh --sanitize      install + build the sanitizer build: clang, AddressSanitizer,
+#                              UBSan and the fuzz targets, in build-asan (docs/reliability.md)
+# Environment: BUILD_DIR (default build), SANITIZE_BUILD_DIR (default build-asan),
+# BUILD_TYPE (default RelWithDebInfo), JOBS (default nproc).
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -21,6 +24,9 @@ PACKAGES=(
 # The viewer's end-to-end test drives a real browser: Debian's Chromium through its chromedriver
 # and Selenium. Installed after the rest and not fatal: without them only that test is skipped.
 BROWSER_PACKAGES=(chromium chromium-driver python3-selenium fonts-liberation)
+# The sanitizer build only: clang with its sanitizer and libFuzzer runtimes, and llvm-symbolizer,
+# which turns the addresses in a report into files and lines.
+SANITIZER_PACKAGES=(clang libclang-rt-dev llvm)
 
 # install_missing PACKAGE...: apt-get installs those not installed yet.
 install_missing() {
@@ -43,11 +49,13 @@ install_missing() {
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
+# build DIR [CMAKE_ARG...]: configures DIR the first time (with the arguments), then builds it.
 build() {
-  local dir="${BUILD_DIR:-build}"
+  local dir="$1"
+  shift
   local jobs="${JOBS:-$(nproc)}"
   if [ ! -f "$dir/build.ninja" ]; then
-    cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}" >/dev/null
+    cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}" "$@" >/dev/null
   fi
   cmake --build "$dir" -j "$jobs"
 }
@@ -58,6 +66,11 @@ if ! (install_missing "${BROWSER_PACKAGES[@]}"); then
   echo "setup: could not install ${BROWSER_PACKAGES[*]}; the viewer's browser test will be skipped" >&2
 fi
 [ "$mode" = "--install-only" ] && exit 0
-build
+if [ "$mode" = "--sanitize" ]; then
+  install_missing "${SANITIZER_PACKAGES[@]}"
+  build "${SANITIZE_BUILD_DIR:-build-asan}" -DCMAKE_CXX_COMPILER=clang++ -DUBERSIM_SANITIZE=ON -DUBERSIM_FUZZ=ON
+  exit 0
+fi
+build "${BUILD_DIR:-build}"
 [ "$mode" = "--no-run" ] && exit 0
 exec "${BUILD_DIR:-build}/bin/ubersim" run

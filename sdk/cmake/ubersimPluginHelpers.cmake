@@ -41,7 +41,11 @@ function(ubersim_add_plugin name)
   target_include_directories(${name} PRIVATE "${gen_dir}")
   target_link_libraries(${name} PRIVATE ubersim::sdk ${P_LIBS})
   target_compile_features(${name} PRIVATE cxx_std_20)
-  target_link_options(${name} PRIVATE "LINKER:--no-undefined")
+  # Not in a sanitizer build: there the runtime's symbols come from the executable that loads
+  # the plugin, so they are undefined in the plugin by design.
+  if(NOT UBERSIM_SANITIZE)
+    target_link_options(${name} PRIVATE "LINKER:--no-undefined")
+  endif()
   set_target_properties(${name} PROPERTIES
     PREFIX "lib"
     OUTPUT_NAME "ubersim_${name}"

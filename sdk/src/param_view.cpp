@@ -230,7 +230,7 @@ class TreeBuilder : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>, TreeB
     } else {
       // A member is located at its key, as in YAML files.
       Locate(n, f.key_offset);
-      f.node.members.emplace_back(std::move(f.key), std::move(n));
+      f.node.members.push_back({std::move(f.key), std::move(n)});
     }
     return true;
   }
@@ -355,7 +355,7 @@ std::vector<std::string> ParamView::Keys() const {
   std::vector<std::string> keys;
   if (node_->kind != Kind::kObject) return keys;
   keys.reserve(node_->members.size());
-  for (const auto& m : node_->members) keys.push_back(m.first);
+  for (const auto& m : node_->members) keys.push_back(m.key);
   return keys;
 }
 

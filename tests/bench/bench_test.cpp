@@ -68,8 +68,10 @@ TEST_F(BenchWorld, TheBaselineCopiesEveryBodyAndJointAndItsRobotsStandOnTheirWhe
     EXPECT_NEAR(mirror.BodyPosition(index).z(), z, 0.003) << "chassis body " << index;
     int k = 0;
     Vec3 kernel_position = Vec3::Zero();
+    // A copy: a lambda may capture a structured binding only from C++20 on, which clang 14 lacks.
+    const auto body = index;
     world->scene().Root().ForEachBody([&](BodyImpl& b) {
-      if (k++ == index) kernel_position = b.GetPose().position;
+      if (k++ == body) kernel_position = b.GetPose().position;
     });
     apart += (mirror.BodyPosition(index) - kernel_position).head<2>().norm() / 12.0;
     moved += (kernel_position.head<2>() - start_xy.at(index)).norm() / 12.0;

@@ -159,7 +159,7 @@ TEST(OmniForceDrive, TheWorldsWheelCarpetFrictionIsTheWheelsGripAndTheSupportsHa
     }
   });
   w.Step(100);
-  w.world->events().Post(PositionEvent{Target::Robot({Team::kBlue, 0}), {}, {}, Vec3(0.5, 0.3, 0), Vec3(0, 0, 1.0)});
+  w.world->events().Post(PositionEvent{Target::Robot({Team::kBlue, 0}), {}, {}, Vec3(0.5, 0.3, 0), Vec3(0, 0, 1.0), {}});
   w.Step(1);
   w.Drive(LocalVelocityCommand{}, 1.0);  // commanded to stop: with no grip it cannot
   const RobotState r = w.Robot();
@@ -194,7 +194,9 @@ TEST_P(OmniForceSteadyVelocity, LagsTheCommandOnlyByTheRollersDrag) {
   } else {
     EXPECT_LT(m.local.norm(), 1e-4) << c.name;
   }
-  if (c.angular != 0) EXPECT_NEAR(m.spin, c.angular, 1e-3 * std::abs(c.angular)) << c.name;
+  if (c.angular != 0) {
+    EXPECT_NEAR(m.spin, c.angular, 1e-3 * std::abs(c.angular)) << c.name;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(

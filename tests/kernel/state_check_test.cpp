@@ -80,7 +80,7 @@ struct DivA : ::testing::Test {
     world = std::make_unique<World>(model, registry, log, false);
   }
   // Walls' inner faces: Div A's carpet is 13.2 × 9.6 m.
-  static constexpr double kHalfX = 6.6, kHalfY = 4.8, kWall = 0.05;
+  static constexpr double kHalfY = 4.8, kWall = 0.05;
 
   void Teleport(RobotId id, double x, double y, double yaw) {
     PositionEvent e;

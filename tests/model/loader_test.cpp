@@ -442,6 +442,23 @@ TEST_F(Loader, FileOfTheWrongKind) {
          "unknown kind 'referee' (allowed: world, field, ball, robot)");
 }
 
+TEST_F(Loader, TextInMemoryIsCheckedAsTheFileItNames) {
+  // Nothing is written: the name only places the text, for messages and relative paths.
+  const auto name = dir() / "worlds" / "typed-in.yaml";
+  EXPECT_EQ(loader_.ValidateText(kField, name), "field");
+  Expect(ErrorOf([&] { loader_.ValidateText("kind: ball\nname: golf\nradius: 0.0215\nmass: -1\n", name); }), name,
+         4, 1, "mass", "value -1 must be greater than 0");
+  Expect(ErrorOf([&] { loader_.ValidateText("kind: ball\nname: x\nradius: 0.02\n  mass: 1\n", name); }), name, 4,
+         7, "", "YAML syntax error: illegal map value");
+  // A world's relative paths resolve against the named file's folder.
+  Write("fields/f.yaml", kField);
+  const std::string world = "kind: world\nname: w\nfield: ../fields/f.yaml\nball: ../balls/none.yaml\n";
+  Expect(ErrorOf([&] { loader_.ValidateText(world, name); }), name, 4, 1, "ball",
+         "cannot open ball file '" + (dir() / "balls/none.yaml").string() + "': No such file or directory");
+  Write("balls/none.yaml", "kind: ball\nname: x\nradius: 0.02\nmass: 0.04\n");
+  EXPECT_EQ(loader_.ValidateText(world, name), "world");
+}
+
 TEST_F(Loader, YamlSyntaxError) {
   const auto path = Write("ball.yaml", "kind: ball\nname: golf\nradius: 0.0215\n  mass: 0.046\n");
   Expect(ErrorOf([&] { loader_.LoadBall(path); }), path, 4, 7, "", "YAML syntax error: illegal map value");

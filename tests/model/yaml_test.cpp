@@ -108,14 +108,45 @@ TEST(Yaml, SyntaxErrorsSayWhere) {
   EXPECT_EQ(flow.line(), 2);
   EXPECT_EQ(flow.reason(), "YAML syntax error: end of sequence flow not found");
   const ModelError two = ErrorOf("a: 1\n---\nb: 2\n", "s.yaml");
-  EXPECT_EQ(two.line(), 3);
-  EXPECT_EQ(two.reason(), "a model file holds one YAML document, this one has 2");
+  EXPECT_EQ(two.line(), 2);  // its "---"
+  EXPECT_EQ(two.reason(), "a model file holds one YAML document; a second one starts here");
+}
+
+TEST(Yaml, AStrayCommaIsAnErrorNotAnEndlessLoop) {
+  // yaml-cpp 0.7 leaves a ',' after a document's node unread; its LoadAll then made empty
+  // documents until memory ran out (found by fuzz.model_loader).
+  const ModelError bare = ErrorOf(",", "c.yaml");
+  EXPECT_EQ(bare.line(), 1);
+  EXPECT_EQ(bare.column(), 1);
+  EXPECT_EQ(bare.reason(), "YAML syntax error: unexpected ','");
+  const ModelError after_map = ErrorOf("{a: 1}\n,\n", "c.yaml");
+  EXPECT_EQ(after_map.line(), 2);
+  EXPECT_EQ(after_map.reason(), "YAML syntax error: unexpected ','");
+  const ModelError tagged = ErrorOf("!!str ,", "c.yaml");
+  EXPECT_EQ(tagged.reason(), "YAML syntax error: unexpected ','");
 }
 
 TEST(Yaml, EmptyTextIsANullRoot) {
   const auto root = ParseYamlText("# only a comment\n", "e.yaml");
   EXPECT_EQ(root->kind, Kind::kNull);
   EXPECT_EQ(root->line, 1);
+}
+
+TEST(Yaml, AliasesThatExpandWithoutBoundAreAnError) {
+  // Eight lines that stand for 10^8 values once expanded: refused, quickly.
+  std::string text = "a0: &a0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n";
+  for (int i = 1; i < 8; ++i) {
+    const std::string prev = "*a" + std::to_string(i - 1);
+    text += "a" + std::to_string(i) + ": &a" + std::to_string(i) + " [" + prev;
+    for (int k = 1; k < 10; ++k) text += ", " + prev;
+    text += "]\n";
+  }
+  const ModelError e = ErrorOf(text);
+  EXPECT_EQ(e.reason(), "more than 100000 values once aliases are expanded (aliases of aliases?)");
+  EXPECT_GE(e.line(), 1);
+  // Aliases that stay small are fine.
+  const ParamView p(ParseYamlText("base: &b {mass: 2.3}\nrobot: *b\n", "t.yaml"));
+  EXPECT_EQ(p["robot"]["mass"].AsDouble(), 2.3);
 }
 
 class YamlFile : public ubersim::testing::TempDirTest {};
@@ -138,6 +169,16 @@ TEST_F(YamlFile, MissingFileSaysSoWithoutALine) {
     FAIL() << "no error";
   } catch (const ModelError& e) {
     EXPECT_EQ(e.reason(), "cannot open file: Is a directory");
+  }
+}
+
+TEST_F(YamlFile, EndlessFileIsRefusedNotReadForever) {
+  try {
+    ParseYamlFile("/dev/zero");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.file(), "/dev/zero");
+    EXPECT_EQ(e.reason(), "larger than 16 MiB: not a model file");
   }
 }
 

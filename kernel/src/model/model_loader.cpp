@@ -143,7 +143,7 @@ std::shared_ptr<const ParamNode> WithoutPlugin(const ParamView& block) {
   auto copy = std::make_shared<ParamNode>(block.Node());
   auto& m = copy->members;
   for (auto it = m.begin(); it != m.end(); ++it) {
-    if (it->first == "plugin") {
+    if (it->key == "plugin") {
       m.erase(it);
       break;
     }
@@ -185,7 +185,13 @@ struct ModelLoader::Impl {
         throw ErrorAt(*naming, "cannot open " + kind + " file '" + file.string() + "': " + why);
       }
     }
-    const ParamView root(ParseYamlFile(file));
+    return Checked(ParamView(ParseYamlFile(file)), kind, naming, file);
+  }
+
+  /// Checks that the parsed `root` of `file` is a `kind` model and validates it against the
+  /// kind's schema (`naming` as for Read).
+  ParamView Checked(const ParamView& root, const std::string& kind, const ParamView* naming,
+                    const fs::path& file) const {
     const std::string actual = KindOf(root);
     if (actual != kind) {
       if (naming) {
@@ -227,7 +233,11 @@ struct ModelLoader::Impl {
   }
 
   std::shared_ptr<const FieldModel> Field(const fs::path& file, const ParamView* naming) const {
-    const ParamView v = Read(file, "field", naming);
+    return FieldFrom(file, Read(file, "field", naming));
+  }
+
+  /// The field of the checked root `v` of `file` (the same split for the other kinds).
+  std::shared_ptr<const FieldModel> FieldFrom(const fs::path& file, const ParamView& v) const {
     auto f = std::make_shared<FieldModel>();
     f->file = file.string();
     FieldGeometry& g = f->geometry;
@@ -299,7 +309,10 @@ struct ModelLoader::Impl {
   }
 
   std::shared_ptr<const BallModel> Ball(const fs::path& file, const ParamView* naming) const {
-    const ParamView v = Read(file, "ball", naming);
+    return BallFrom(file, Read(file, "ball", naming));
+  }
+
+  std::shared_ptr<const BallModel> BallFrom(const fs::path& file, const ParamView& v) const {
     auto b = std::make_shared<BallModel>();
     b->file = file.string();
     b->name = v["name"].AsString();
@@ -315,7 +328,10 @@ struct ModelLoader::Impl {
   }
 
   std::shared_ptr<const RobotModel> Robot(const fs::path& file, const ParamView* naming) const {
-    const ParamView v = Read(file, "robot", naming);
+    return RobotFrom(file, Read(file, "robot", naming));
+  }
+
+  std::shared_ptr<const RobotModel> RobotFrom(const fs::path& file, const ParamView& v) const {
     auto r = std::make_shared<RobotModel>();
     r->file = file.string();
     r->name = v["name"].AsString();
@@ -358,8 +374,9 @@ struct ModelLoader::Impl {
     return r;
   }
 
-  WorldModel World(const fs::path& file) const {
-    const ParamView v = Read(file, "world", nullptr);
+  WorldModel World(const fs::path& file) const { return WorldFrom(file, Read(file, "world", nullptr)); }
+
+  WorldModel WorldFrom(const fs::path& file, const ParamView& v) const {
     WorldModel w;
     w.file = file.string();
     w.name = v["name"].AsString();
@@ -537,6 +554,19 @@ std::string ModelLoader::Validate(const std::filesystem::path& file) const {
   else if (kind == "field") LoadField(file);
   else if (kind == "ball") LoadBall(file);
   else LoadRobot(file);
+  return kind;
+}
+
+std::string ModelLoader::ValidateText(const std::string& text, const std::filesystem::path& file) const {
+  const ParamView root(ParseYamlText(text, file.string()));
+  const std::string kind = KindOf(root);
+  Guard(file, [&] {
+    const ParamView v = impl_->Checked(root, kind, nullptr, file);
+    if (kind == "world") impl_->WorldFrom(file, v);
+    else if (kind == "field") impl_->FieldFrom(file, v);
+    else if (kind == "ball") impl_->BallFrom(file, v);
+    else impl_->RobotFrom(file, v);
+  });
   return kind;
 }
 

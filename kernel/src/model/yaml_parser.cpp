@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // YAML text -> located ParamNode tree (yaml-cpp), with YAML 1.2 core-schema scalar typing.
+#include <algorithm>
+#include <array>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -9,7 +11,9 @@
 #include <sstream>
 #include <string>
 #include <system_error>
+#include <vector>
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include "model_internal.hpp"
@@ -22,6 +26,11 @@ using detail::ParamNode;
 using Kind = ParamNode::Kind;
 
 constexpr int kMaxDepth = 200;
+// Values after aliases are expanded. A shipped model has a few hundred; aliases of aliases can
+// make a few lines stand for billions, which would take the loader all memory and time.
+constexpr std::size_t kMaxValues = 100000;
+// A model file is text of a few kB; this stops a file name like /dev/zero from filling memory.
+constexpr std::size_t kMaxFileBytes = 16u << 20;
 
 bool IsDigit(char c) { return c >= '0' && c <= '9'; }
 
@@ -76,6 +85,10 @@ class Converter {
       throw ModelError(file_, line, column, key, "nested more than " + std::to_string(kMaxDepth) +
                                                      " levels deep (a recursive alias?)");
     }
+    if (++values_ > kMaxValues) {
+      throw ModelError(file_, line, column, key, "more than " + std::to_string(kMaxValues) +
+                                                     " values once aliases are expanded (aliases of aliases?)");
+    }
     switch (n.Type()) {
       case YAML::NodeType::Undefined:
       case YAML::NodeType::Null:
@@ -115,7 +128,7 @@ class Converter {
             }
           }
           // A member is located at its key: that is where a reader looks for it.
-          out.members.emplace_back(name, Convert(value, kl, kc, path, depth + 1));
+          out.members.push_back({name, Convert(value, kl, kc, path, depth + 1)});
         }
         break;
       }
@@ -180,38 +193,69 @@ class Converter {
   }
 
   std::string file_;
+  std::size_t values_ = 0;  // converted so far
+};
+
+// Counts a text's documents from yaml-cpp's event stream (nothing is built), stopping at the
+// second one: all ParseYamlText needs to know.
+class DocumentCounter final : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark& mark) override { starts.push_back(mark); }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+
+  std::vector<YAML::Mark> starts;  // where each document began
 };
 
 }  // namespace
 
 std::shared_ptr<const detail::ParamNode> ParseYamlText(const std::string& text,
                                                        const std::string& file) {
-  std::vector<YAML::Node> docs;
+  const auto where = [&](const YAML::Mark& m, const std::string& why) {
+    return ModelError(file, m.line >= 0 ? m.line + 1 : 0, m.column >= 0 ? m.column + 1 : 0, "", why);
+  };
+  YAML::Node doc;
+  std::size_t documents = 0;
   try {
-    docs = YAML::LoadAll(text);
+    // Not YAML::LoadAll: yaml-cpp 0.7 never consumes a stray ',' after a document's node (a file
+    // that is just ","), and LoadAll then collects empty documents until memory runs out. Counting
+    // first, at most three, finds that: a document starts where the one before it did.
+    std::istringstream stream(text);
+    YAML::Parser parser(stream);
+    DocumentCounter counter;
+    while (counter.starts.size() < 3 && parser.HandleNextDocument(counter)) {
+    }
+    const std::vector<YAML::Mark>& starts = counter.starts;
+    for (std::size_t i = 1; i < starts.size(); ++i) {
+      if (starts[i].pos != starts[i - 1].pos) continue;
+      const auto at = static_cast<std::size_t>(std::max(starts[i].pos, 0));
+      const char c = at < text.size() ? text[at] : '?';
+      throw where(starts[i], std::string("YAML syntax error: unexpected '") + c + "'");
+    }
+    documents = starts.size();
+    if (documents > 1) throw where(starts[1], "a model file holds one YAML document; a second one starts here");
+    if (documents == 1) doc = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    const int line = e.mark.line >= 0 ? e.mark.line + 1 : 0;
-    const int column = e.mark.column >= 0 ? e.mark.column + 1 : 0;
-    throw ModelError(file, line, column, "", "YAML syntax error: " + e.msg);
-  }
-  if (docs.size() > 1) {
-    const YAML::Mark m = docs[1].Mark();
-    throw ModelError(file, m.line >= 0 ? m.line + 1 : 0, m.column >= 0 ? m.column + 1 : 0, "",
-                     "a model file holds one YAML document, this one has " +
-                         std::to_string(docs.size()));
+    throw where(e.mark, "YAML syntax error: " + e.msg);
   }
   Converter converter(file);
-  if (docs.empty()) {
+  if (documents == 0) {
     auto empty = std::make_shared<detail::ParamNode>();
     empty->file = file;
     empty->line = 1;
     empty->column = 1;
     return empty;
   }
-  const YAML::Mark m = docs[0].Mark();
+  const YAML::Mark m = doc.Mark();
   const int line = m.line >= 0 ? m.line + 1 : 1;
   const int column = m.column >= 0 ? m.column + 1 : 1;
-  return std::make_shared<const detail::ParamNode>(converter.Convert(docs[0], line, column, "", 0));
+  return std::make_shared<const detail::ParamNode>(converter.Convert(doc, line, column, "", 0));
 }
 
 std::shared_ptr<const detail::ParamNode> ParseYamlFile(const std::filesystem::path& file) {
@@ -226,12 +270,19 @@ std::shared_ptr<const detail::ParamNode> ParseYamlFile(const std::filesystem::pa
     const int err = errno ? errno : ENOENT;
     throw ModelError(name, 0, 0, "", std::string("cannot open file: ") + std::strerror(err));
   }
-  std::ostringstream text;
-  text << in.rdbuf();
+  std::string text;
+  std::array<char, 65536> chunk;
+  while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxFileBytes) {
+      throw ModelError(name, 0, 0, "", "larger than " + std::to_string(kMaxFileBytes >> 20) +
+                                           " MiB: not a model file");
+    }
+  }
   if (in.bad()) {
     throw ModelError(name, 0, 0, "", std::string("cannot read file: ") + std::strerror(errno));
   }
-  return ParseYamlText(text.str(), name);
+  return ParseYamlText(text, name);
 }
 
 }  // namespace ubersim::kernel

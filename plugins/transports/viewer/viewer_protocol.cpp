@@ -376,7 +376,7 @@ DecodedCommand DecodeCommand(std::string_view text, const CommandLimits& limits)
     return out;
   }
   out.id = ReadId(doc);
-  const auto cmd = doc.FindMember("cmd");
+  auto cmd = doc.FindMember("cmd");  // not const: rapidjson's == is ambiguous in C++20 then
   if (cmd == doc.MemberEnd() || !cmd->value.IsString()) {
     out.error = "'cmd' is missing or not a string";
     return out;
@@ -391,7 +391,7 @@ DecodedCommand DecodeCommand(std::string_view text, const CommandLimits& limits)
     if (name != "reset") out.paused = name == "pause";
     out.events.emplace_back(e);
   } else if (name == "step") {
-    const auto it = doc.FindMember("steps");
+    auto it = doc.FindMember("steps");
     int steps = 1;
     if (it != doc.MemberEnd()) {
       if (!it->value.IsInt() || it->value.GetInt() < 1 || it->value.GetInt() > limits.max_steps) {

@@ -161,6 +161,9 @@ class ModelLoader {
   /// Reads any model file by its `kind:` and validates it fully (for `ubersim validate`);
   /// returns the kind.
   std::string Validate(const std::filesystem::path& file) const;
+  /// As Validate, for model text already in memory: `file` names it in errors, and relative
+  /// paths in it resolve against the folder of `file` (which need not exist as a file).
+  std::string ValidateText(const std::string& text, const std::filesystem::path& file) const;
 
   /// The installed or source-tree schemas/ folder, found relative to the running executable.
   static std::filesystem::path DefaultSchemaDir();
