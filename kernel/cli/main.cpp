@@ -20,11 +20,13 @@
 
 #include "ubersim/error.hpp"
 #include "ubersim/version.hpp"
+#include "ubersim/kernel/crash_report.hpp"
 #include "ubersim/kernel/data_paths.hpp"
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/model.hpp"
 #include "ubersim/kernel/plugin_registry.hpp"
 #include "ubersim/kernel/runner.hpp"
+#include "ubersim/kernel/snapshot.hpp"
 #include "ubersim/kernel/world.hpp"
 #include "ubersim/validation/report.hpp"
 #include "ubersim/validation/scenarios.hpp"
@@ -48,12 +50,20 @@ constexpr int kExitPlugin = 4;
 constexpr int kExitOutOfBand = 5;
 constexpr int kExitSoakFailed = 6;
 
-// The one piece of process-wide state: set by SIGINT/SIGTERM, read by the run loop.
+constexpr int kExitPluginFault = 7;  // run: a plugin fault stopped the world; report written
+
+// Process-wide state, set by signal handlers and read by the run loop: stop (SIGINT, SIGTERM)
+// and save a snapshot (SIGUSR1). (The crash guard keeps its own, crash_report.hpp.)
 std::atomic<bool>& StopRequested() {
   static std::atomic<bool> stop{false};
   return stop;
 }
+std::atomic<bool>& SnapshotRequested() {
+  static std::atomic<bool> save{false};
+  return save;
+}
 extern "C" void OnSignal(int) { StopRequested().store(true); }
+extern "C" void OnSnapshotSignal(int) { SnapshotRequested().store(true); }
 
 const char* kTopHelp =
     "ÜberSim — RoboCup Small Size League simulator\n"
@@ -72,7 +82,8 @@ const char* kTopHelp =
     "`ubersim <command> --help` describes a command's options.\n"
     "exit codes: 0 ok, 1 runtime error, 2 bad usage, 3 invalid model file, 4 plugin error,\n"
     "            5 a validated physics number outside its band, 6 soak: a state-check finding\n"
-    "            or memory growth\n";
+    "            or memory growth, 7 run: a plugin fault stopped the world (crash report\n"
+    "            and snapshot written)\n";
 
 std::vector<fs::path> ToPaths(const std::vector<std::string>& v) {
   return std::vector<fs::path>(v.begin(), v.end());
@@ -147,12 +158,17 @@ int RunCommand(const std::vector<std::string>& args) {
       "usage: ubersim run [WORLD] [options]\n\n"
       "Runs WORLD (default models/worlds/div-b.yaml) in real time, printing where it publishes\n"
       "(the browser viewer's address among them) and a live status line (sim time, real-time\n"
-      "factor). Ctrl-C stops it.\n\noptions");
+      "factor). Ctrl-C stops it. --restore starts from a snapshot; --snapshot-out saves one when\n"
+      "the run ends and on SIGUSR1. A plugin fault under the world's on_plugin_fault: stop ends\n"
+      "the run with exit code 7, a crash report and a snapshot in --crash-dir; so does a crash\n"
+      "(a fatal signal: the report holds the last periodic snapshot).\n\noptions");
   std::string world_arg;
   double duration = 0, speed = 1.0;
   std::string log_level = "info";
   std::vector<std::string> plugin_paths;
   std::vector<std::string> skipped_transports;
+  std::string restore_file, snapshot_out, crash_dir = ".";
+  double crash_snapshot_interval = 1.0;
   desc.add_options()("help,h", "this help")
       ("fast", "run as fast as possible instead of real time")
       ("speed", po::value<double>(&speed)->default_value(1.0), "speed factor (sim s per wall s)")
@@ -162,7 +178,12 @@ int RunCommand(const std::vector<std::string>& args) {
       ("no-viewer", "do not start the browser viewer (the same as --no-transport viewer)")
       ("no-transport", po::value<std::vector<std::string>>(&skipped_transports), "do not start the world's transport ID (repeatable)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)")
-      ("log-level", po::value<std::string>(&log_level)->default_value("info"), "debug, info, warning or error");
+      ("log-level", po::value<std::string>(&log_level)->default_value("info"), "debug, info, warning or error")
+      ("restore", po::value<std::string>(&restore_file), "start from the snapshot FILE (of this world)")
+      ("snapshot-out", po::value<std::string>(&snapshot_out), "save a snapshot to FILE when the run ends and on SIGUSR1")
+      ("crash-dir", po::value<std::string>(&crash_dir)->default_value("."), "where crash reports and their snapshots go")
+      ("crash-snapshot-interval", po::value<double>(&crash_snapshot_interval)->default_value(1.0),
+       "simulated seconds between the in-memory snapshots a crash report writes (0: none)");
   po::options_description hidden;
   hidden.add_options()("world", po::value<std::string>(&world_arg));
   po::positional_options_description pos;
@@ -181,8 +202,8 @@ int RunCommand(const std::vector<std::string>& args) {
     std::cout << desc << "\n";
     return kExitOk;
   }
-  if (duration < 0 || speed < 0) {
-    std::cerr << "ubersim run: --duration and --speed must be >= 0\n";
+  if (duration < 0 || speed < 0 || !(crash_snapshot_interval >= 0)) {
+    std::cerr << "ubersim run: --duration, --speed and --crash-snapshot-interval must be >= 0\n";
     return kExitUsage;
   }
   LogLevel level = LogLevel::kInfo;
@@ -216,6 +237,11 @@ int RunCommand(const std::vector<std::string>& args) {
       if (removed > 0) std::cerr << "ubersim: transport " << id << " not started (--no-" << (id == "viewer" ? "viewer" : "transport") << ")\n";
     }
     World world(model, registry, log);
+    if (!restore_file.empty()) {
+      world.Restore(ReadSnapshotFile(restore_file));
+      std::cerr << "ubersim: restored " << restore_file << ": step " << world.clock().steps() << ", sim time "
+                << world.clock().seconds() << " s\n";
+    }
 
     std::cerr << "ubersim: world '" << model.name << "' from " << world_file.string() << ": "
               << model.robots.size() << " robots, field " << model.field->geometry.name
@@ -236,6 +262,39 @@ int RunCommand(const std::vector<std::string>& args) {
     options.status_interval = tty ? 0.25 : 2.0;
     std::signal(SIGINT, OnSignal);
     std::signal(SIGTERM, OnSignal);
+    std::signal(SIGUSR1, OnSnapshotSignal);
+
+    std::string command_line = "ubersim run";
+    for (const std::string& a : args) command_line += " " + a;
+    const RunDescription run{std::string("ubersim ") + UBERSIM_VERSION, model.name, world_file.string(), command_line};
+    const CrashFiles crash_files = CrashFilesIn(crash_dir, model.name);
+    // A crash (a fatal signal) writes the last of these snapshots, kept in memory.
+    CrashGuard guard(crash_files, run);
+    guard.Install();
+    const auto crash_interval_ns = static_cast<std::int64_t>(crash_snapshot_interval * 1e9 + 0.5);
+    std::int64_t next_crash_snapshot_ns = world.clock().time_ns();
+    const auto save_snapshot = [&](const char* why) {
+      try {
+        WriteSnapshotFile(snapshot_out, world.Save());
+        std::cerr << "ubersim: snapshot of step " << world.clock().steps() << " written to " << snapshot_out << " ("
+                  << why << ")\n";
+      } catch (const std::exception& e) {
+        std::cerr << "ubersim: no snapshot written: " << e.what() << "\n";
+      }
+    };
+    options.between_steps = [&] {
+      if (SnapshotRequested().exchange(false)) {
+        if (snapshot_out.empty()) {
+          std::cerr << "ubersim: SIGUSR1: no --snapshot-out given, nothing saved\n";
+        } else {
+          save_snapshot("SIGUSR1");
+        }
+      }
+      if (crash_interval_ns > 0 && world.clock().time_ns() >= next_crash_snapshot_ns) {
+        guard.Update(world);
+        next_crash_snapshot_ns = world.clock().time_ns() + crash_interval_ns;
+      }
+    };
     const RunStatus final_status = RunWorld(world, options, StopRequested(), [&](const RunStatus& s) {
       if (quiet) return;
       char line[160];
@@ -250,10 +309,20 @@ int RunCommand(const std::vector<std::string>& args) {
     });
     std::cerr << "ubersim: stopped at sim time " << final_status.sim_time << " s after "
               << final_status.steps << " steps\n";
+    if (!snapshot_out.empty()) save_snapshot(world.stopped() ? "the world stopped" : "end of run");
+    if (world.stopped()) {
+      WriteFaultReport(world, crash_files, run);
+      std::cerr << "ubersim: a plugin fault stopped the world (on_plugin_fault: stop); crash report "
+                << crash_files.report.string() << ", snapshot " << crash_files.snapshot.string() << "\n";
+      return kExitPluginFault;
+    }
     return kExitOk;
   } catch (const ModelError& e) {
     std::cerr << "ubersim run: invalid model: " << e.what() << "\n";
     return kExitModel;
+  } catch (const SnapshotError& e) {
+    std::cerr << "ubersim run: snapshot: " << e.what() << "\n";
+    return kExitRuntime;
   } catch (const PluginLoadError& e) {
     std::cerr << "ubersim run: plugin error: " << e.what() << "\n";
     return kExitPlugin;

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <stdexcept>
 
 namespace ubersim::kernel {
 namespace {
@@ -57,6 +59,43 @@ void PerceptionPipeline::Capture(const WorldSnapshot& truth) {
     // The next frame on the camera's own schedule (a long step skips frames, as a slow PC would).
     while (next_capture_ns_[c] <= truth.sim_time_ns) next_capture_ns_[c] += period_ns_;
   }
+}
+
+PerceptionState PerceptionPipeline::SaveState() const {
+  PerceptionState s;
+  s.model = model_;
+  s.next_capture_ns = next_capture_ns_;
+  s.frame_numbers = frame_numbers_;
+  s.in_flight.assign(in_flight_.begin(), in_flight_.end());
+  std::ostringstream rng;
+  rng << rng_;  // the standard's round-trip text form of the engine
+  s.rng = rng.str();
+  return s;
+}
+
+void PerceptionPipeline::RestoreState(const PerceptionState& s) {
+  if (s.next_capture_ns.size() != model_.cameras.size() || s.frame_numbers.size() != model_.cameras.size()) {
+    throw std::invalid_argument("the saved vision state has " + std::to_string(s.next_capture_ns.size()) +
+                                " cameras, this world " + std::to_string(model_.cameras.size()));
+  }
+  std::mt19937_64 rng;
+  std::istringstream in(s.rng);
+  in >> rng;
+  if (!in) throw std::invalid_argument("the saved vision noise generator is unreadable");
+  // Only what realism events change comes from the snapshot; the rest is the world file's.
+  PerceptionModel m = model_;
+  m.latency = s.model.latency;
+  m.ball_position_sigma = s.model.ball_position_sigma;
+  m.robot_position_sigma = s.model.robot_position_sigma;
+  m.robot_orientation_sigma = s.model.robot_orientation_sigma;
+  m.ball_drop = s.model.ball_drop;
+  m.robot_drop = s.model.robot_drop;
+  m.camera_overlap = s.model.camera_overlap;
+  Configure(m);
+  next_capture_ns_ = s.next_capture_ns;
+  frame_numbers_ = s.frame_numbers;
+  in_flight_.assign(s.in_flight.begin(), s.in_flight.end());
+  rng_ = rng;
 }
 
 std::vector<VisionFrame> PerceptionPipeline::Release(std::int64_t now_ns) {
@@ -132,6 +171,29 @@ bool RadioLink::Send(CommandEvent command, std::int64_t now_ns) {
   if (model_.loss > 0 && std::uniform_real_distribution<double>(0.0, 1.0)(rng_) < model_.loss) return false;
   queue_.emplace_back(now_ns + latency_ns_, std::move(command));
   return true;
+}
+
+RadioState RadioLink::SaveState() const {
+  RadioState s;
+  s.model = model_;
+  s.queue.assign(queue_.begin(), queue_.end());
+  std::ostringstream rng;
+  rng << rng_;
+  s.rng = rng.str();
+  return s;
+}
+
+void RadioLink::RestoreState(const RadioState& s) {
+  std::mt19937_64 rng;
+  std::istringstream in(s.rng);
+  in >> rng;
+  if (!in) throw std::invalid_argument("the saved radio loss generator is unreadable");
+  RadioModel m = model_;
+  m.latency = s.model.latency;
+  m.loss = s.model.loss;
+  Configure(m);
+  queue_.assign(s.queue.begin(), s.queue.end());
+  rng_ = rng;
 }
 
 std::vector<CommandEvent> RadioLink::Deliver(std::int64_t now_ns) {

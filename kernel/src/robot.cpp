@@ -3,20 +3,49 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <exception>
+#include <map>
 
 #include "ubersim/error.hpp"
 #include "ubersim/kernel/upright_prism.hpp"
 #include "ubersim/kernel/urdf.hpp"
 
 namespace ubersim::kernel {
+namespace {
+
+bool SurfaceFinite(const SurfaceMaterial& s) {
+  return std::isfinite(s.mu) && std::isfinite(s.mu2) && std::isfinite(s.bounce) && std::isfinite(s.bounce_velocity) &&
+         std::isfinite(s.soft_erp) && std::isfinite(s.soft_cfm) && std::isfinite(s.rolling_friction) &&
+         std::isfinite(s.slip) && s.surface_velocity.allFinite();
+}
+
+void CollectJoints(const NodeImpl& node, std::vector<const JointImpl*>& out) {
+  for (const auto& j : node.joints()) out.push_back(j.get());
+  for (const auto& c : node.children()) CollectJoints(*c, out);
+}
+
+constexpr const char* kNotStd = "threw an exception that is not a std::exception";
+
+}  // namespace
+
+/// One plugin instance of the robot with its context; the context outlives the component.
+struct Robot::Part {
+  std::string plugin;
+  PluginKind kind;
+  std::string file;     // the plugin's library
+  std::string version;  // the plugin's own version
+  std::unique_ptr<Context> context;
+  std::shared_ptr<Component> component;
+  std::vector<const JointImpl*> joints;  // the joints it built: their motors stop when it fails
+  bool failed = false;
+};
 
 /// The RobotContext a component sees.
 class Robot::Context final : public RobotContext {
  public:
-  Context(Robot& robot, const ComponentModel& model, Log& log, const RobotServices& services)
+  Context(Robot& robot, Part& part, const ComponentModel& model, Log& log, const RobotServices& services)
       : robot_(robot),
+        part_(part),
         params_(model.params),
         log_(log, robot.node().Path() + " " + model.plugin),
         services_(services) {}
@@ -41,29 +70,45 @@ class Robot::Context final : public RobotContext {
       throw PluginError("ObserveContacts: geometry '" + own.Name() +
                         "' does not belong to robot " + robot_.node_->Path());
     }
-    g->AddObserver(std::move(handler));
+    // The handler is plugin code running inside the collision manager: a throw or a non-finite
+    // surface is this part's fault, and the contact goes on as if the handler had not run.
+    g->AddObserver([robot = &robot_, part = &part_, handler = std::move(handler)](
+                       const Contact& contact, SurfaceMaterial& surface, bool& accept) {
+      if (part->failed) return;
+      const SurfaceMaterial before = surface;
+      const bool accepted = accept;
+      std::string fault;
+      try {
+        handler(contact, surface, accept);
+        if (!SurfaceFinite(surface)) fault = "set a non-finite surface value";
+      } catch (const std::exception& e) {
+        fault = "threw " + ExceptionText(e);
+      } catch (...) {
+        fault = kNotStd;
+      }
+      if (fault.empty()) return;
+      surface = before;
+      accept = accepted;
+      robot->Fail(*part, "contact handler", fault);
+    });
   }
   PrefixedLog& log() { return log_; }
 
  private:
   Robot& robot_;
+  Part& part_;
   ParamView params_;
   PrefixedLog log_;
   const RobotServices& services_;
 };
 
-/// One plugin instance of the robot with its context; the context outlives the component.
-struct Robot::Part {
-  std::string plugin;
-  PluginKind kind;
-  std::unique_ptr<Context> context;
-  std::shared_ptr<Component> component;
-  bool failed = false;
-};
-
 Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistry& registry,
              Log& log, const RobotServices& services)
-    : id_(placement.id), model_(placement.model), present_(placement.present) {
+    : id_(placement.id),
+      services_(services),
+      log_(log, std::string("robot ") + ToString(placement.id.team) + " " + std::to_string(placement.id.id)),
+      model_(placement.model),
+      present_(placement.present) {
   const RobotModel& m = *model_;
   node_ = static_cast<NodeImpl*>(&team_node.AddChild(std::to_string(id_.id)));
   if (m.urdf_file.empty()) {
@@ -77,7 +122,7 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
     auto part = std::make_unique<Part>();
     part->plugin = cm->plugin;
     part->kind = kind;
-    part->context = std::make_unique<Context>(*this, *cm, log, services);
+    part->context = std::make_unique<Context>(*this, *part, *cm, log, services);
     switch (kind) {
       case PluginKind::kDrive: {
         auto d = registry.CreateDrive(cm->plugin);
@@ -99,17 +144,42 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
       }
       case PluginKind::kTransport: break;
     }
-    try {
-      part->component->Configure(*part->context);
-    } catch (const std::exception& e) {
-      throw PluginError(node_->Path() + " (" + m.file + "): " + ToString(kind) + " plugin '" +
-                        cm->plugin + "' failed to configure: " + e.what());
-    }
+    const PluginInfo& info = registry.Find(kind, cm->plugin);
+    part->file = info.file.string();
+    part->version = info.version;
+    std::vector<const JointImpl*> before;
+    CollectJoints(*node_, before);
+    Part& p = *part;
     parts_.push_back(std::move(part));
+    // PluginError and ParamError are the plugin refusing its parameters: the model file is
+    // wrong, and the world is not built. Anything else is a fault of the plugin.
+    std::string fault;
+    try {
+      p.component->Configure(*p.context);
+    } catch (const PluginError& e) {
+      throw PluginError(node_->Path() + " (" + m.file + "): " + ToString(kind) + " plugin '" + cm->plugin +
+                        "' failed to configure: " + e.what());
+    } catch (const ParamError& e) {
+      throw PluginError(node_->Path() + " (" + m.file + "): " + ToString(kind) + " plugin '" + cm->plugin +
+                        "' failed to configure: " + e.what());
+    } catch (const std::exception& e) {
+      fault = "threw " + ExceptionText(e);
+    } catch (...) {
+      fault = kNotStd;
+    }
+    std::vector<const JointImpl*> after;
+    CollectJoints(*node_, after);
+    for (const JointImpl* j : after) {
+      if (std::find(before.begin(), before.end(), j) == before.end()) p.joints.push_back(j);
+    }
+    // What it built before it threw stays, inert: its motors stopped, its handlers silenced.
+    if (!fault.empty()) Fail(p, "Configure", fault);
   };
   add(m.drive, PluginKind::kDrive);
   add(m.dribbler, PluginKind::kDribbler);
   add(m.kicker, PluginKind::kKicker);
+  node_->ForEachBody([this](BodyImpl& b) { watch_.Add(b); });
+  if (services_.ball) watch_.Add(*services_.ball);
   if (!present_) {
     present_ = true;
     SetPresent(false);
@@ -200,21 +270,89 @@ Robot::~Robot() {
   parts_.clear();
 }
 
+void Robot::Fail(Part& p, const std::string& phase, const std::string& what) {
+  if (p.failed) return;
+  p.failed = true;
+  for (const JointImpl* j : p.joints) StopMotor(*j);
+  PluginFault f;
+  f.robot = id_;
+  f.kind = p.kind;
+  f.plugin = p.plugin;
+  f.file = p.file;
+  f.phase = phase;
+  f.what = what;
+  if (services_.faults) {
+    services_.faults->Report(std::move(f));
+  } else {
+    p.context->log().Error(f.Describe() + "; this " + ToString(p.kind) + " is switched off");
+  }
+}
+
+template <typename F>
+bool Robot::Guarded(Part& p, const char* phase, F&& call) {
+  if (p.failed) return false;
+  try {
+    call();
+  } catch (const std::exception& e) {
+    Fail(p, phase, "threw " + ExceptionText(e));
+  } catch (...) {
+    Fail(p, phase, kNotStd);
+  }
+  CheckAfter(p, phase);
+  return !p.failed;
+}
+
+template <typename F>
+void Robot::Queried(Part& p, const char* phase, F&& call) const {
+  if (p.failed) return;
+  try {
+    call();
+  } catch (const std::exception& e) {
+    const_cast<Robot&>(*this).Fail(p, phase, "threw " + ExceptionText(e));
+  } catch (...) {
+    const_cast<Robot&>(*this).Fail(p, phase, kNotStd);
+  }
+}
+
+void Robot::CheckAfter(Part& p, const char* phase) {
+  if (watch_.AllFinite()) return;
+  std::string where = FindNonFinite(*node_);
+  if (where.empty() && services_.ball) where = "ball: " + NonFiniteIn(*services_.ball);
+  Fail(p, phase, "left a non-finite value: " + where);
+  Repair();
+}
+
+void Robot::Repair() {
+  if (!services_.last_good) return;
+  kernel::RepairNonFinite(*node_, *services_.last_good);
+  if (services_.ball && !NonFiniteIn(*services_.ball).empty()) services_.last_good->Restore(*services_.ball);
+}
+
 void Robot::RunPhase(bool pre, const StepInfo& step) {
   if (!present_) return;
   for (auto& p : parts_) {
-    if (p->failed) continue;
-    try {
-      if (pre) {
-        p->component->PreStep(step);
-      } else {
-        p->component->PostStep(step);
-      }
-    } catch (const std::exception& e) {
-      p->failed = true;
-      p->context->log().Error(std::string(pre ? "PreStep" : "PostStep") + " threw: " + e.what() +
-                              "; this " + ToString(p->kind) + " is switched off");
+    if (pre) {
+      Guarded(*p, "PreStep", [&] { p->component->PreStep(step); });
+    } else {
+      Guarded(*p, "PostStep", [&] { p->component->PostStep(step); });
     }
+  }
+}
+
+void Robot::RepairNonFinite(const char* when, std::int64_t step, const std::string& what) {
+  const bool again = step - repaired_at_ <= 1;
+  repaired_at_ = step;
+  PluginFault f;
+  f.robot = id_;
+  f.phase = when;
+  f.what = what + " (no plugin call left a non-finite value)";
+  if (services_.faults) services_.faults->Report(std::move(f));
+  if (services_.last_good) kernel::RepairNonFinite(*node_, *services_.last_good);  // its own bodies only
+  if (again && present_) {
+    // Put back twice running: whatever drives it there will do it again; off the field it
+    // harms nothing, and a position event can put it back.
+    SetPresent(false);
+    log_.Error("went non-finite in two steps running: taken off the field");
   }
 }
 
@@ -223,22 +361,31 @@ void Robot::PostStep(const StepInfo& step) { RunPhase(false, step); }
 
 bool Robot::Command(const CommandEvent& e, std::string& why) {
   bool ok = true;
-  auto guarded = [&](Component* c, const char* what, auto&& f) {
-    if (!c) {
-      why += std::string(why.empty() ? "" : "; ") + "robot has no " + what;
-      ok = false;
-      return;
-    }
-    try {
-      f();
-    } catch (const std::exception& ex) {
-      why += std::string(why.empty() ? "" : "; ") + what + " refused the command: " + ex.what();
-      ok = false;
-    }
+  const auto refuse = [&](const std::string& reason) {
+    why += (why.empty() ? "" : "; ") + reason;
+    ok = false;
   };
-  if (e.move) guarded(drive_, "drive", [&] { drive_->SetCommand(*e.move); });
-  if (e.dribbler_speed) guarded(dribbler_, "dribbler", [&] { dribbler_->SetSpeed(*e.dribbler_speed); });
-  if (e.kick) guarded(kicker_, "kicker", [&] { kicker_->Kick(*e.kick); });
+  // PluginError is the part refusing this command (a wheel count that does not fit): the
+  // command is rejected and the part carries on. Anything else is a fault of the part.
+  const auto deliver = [&](PluginKind kind, const char* phase, auto&& call) {
+    Part* part = nullptr;
+    for (auto& p : parts_) {
+      if (p->kind == kind) part = p.get();
+    }
+    if (!part) return refuse(std::string("robot has no ") + ToString(kind));
+    if (part->failed) return refuse(std::string("its ") + ToString(kind) + " is switched off after a fault");
+    const bool alive = Guarded(*part, phase, [&] {
+      try {
+        call();
+      } catch (const PluginError& ex) {
+        refuse(std::string(ToString(kind)) + " refused the command: " + ex.what());
+      }
+    });
+    if (!alive) refuse(std::string(ToString(kind)) + " failed on the command");
+  };
+  if (e.move) deliver(PluginKind::kDrive, "SetCommand", [&] { drive_->SetCommand(*e.move); });
+  if (e.dribbler_speed) deliver(PluginKind::kDribbler, "SetSpeed", [&] { dribbler_->SetSpeed(*e.dribbler_speed); });
+  if (e.kick) deliver(PluginKind::kKicker, "Kick", [&] { kicker_->Kick(*e.kick); });
   return ok;
 }
 
@@ -285,10 +432,76 @@ RobotState Robot::State() const {
   s.twist = chassis_->GetTwist();
   s.radius = model_->body.radius;
   s.height = model_->body.height;
-  // A robot off the field touches nothing and kicks nothing, whatever its parts last saw.
-  if (dribbler_ && present_) s.dribbler_ball_contact = dribbler_->TouchesBall();
-  if (kicker_ && present_) s.kicker_ready = kicker_->Ready();
+  // A robot off the field touches nothing and kicks nothing, whatever its parts last saw; a
+  // part switched off reports nothing.
+  if (!present_) return s;
+  for (const auto& p : parts_) {
+    if (p->kind == PluginKind::kDribbler) {
+      Queried(*p, "TouchesBall", [&] { s.dribbler_ball_contact = dribbler_->TouchesBall(); });
+    } else if (p->kind == PluginKind::kKicker) {
+      Queried(*p, "Ready", [&] { s.kicker_ready = kicker_->Ready(); });
+    }
+  }
   return s;
+}
+
+std::vector<PartState> Robot::SaveParts() const {
+  std::vector<PartState> out;
+  for (const auto& p : parts_) {
+    PartState ps;
+    ps.kind = p->kind;
+    ps.plugin = p->plugin;
+    ps.version = p->version;
+    ps.failed = p->failed;
+    if (p->failed) {  // switched off for good: whatever it holds is not asked for
+      out.push_back(std::move(ps));
+      continue;
+    }
+    try {
+      ps.state = p->component->SaveState();
+    } catch (const std::exception& e) {
+      throw PluginError(node_->Path() + " " + ToString(p->kind) + " '" + p->plugin + "' (" + p->file +
+                        "): SaveState threw " + ExceptionText(e));
+    } catch (...) {
+      throw PluginError(node_->Path() + " " + ToString(p->kind) + " '" + p->plugin + "' (" + p->file + "): SaveState " +
+                        kNotStd);
+    }
+    out.push_back(std::move(ps));
+  }
+  return out;
+}
+
+void Robot::RestoreParts(const std::vector<PartState>& parts) {
+  if (parts.size() != parts_.size()) {
+    throw PluginError("robot " + node_->Path() + " has " + std::to_string(parts_.size()) + " parts, the snapshot " +
+                      std::to_string(parts.size()));
+  }
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    Part& p = *parts_[i];
+    const PartState& saved = parts[i];
+    const std::string who = node_->Path() + " " + ToString(p.kind) + " '" + p.plugin + "'";
+    if (saved.kind != p.kind || saved.plugin != p.plugin) {
+      throw PluginError(who + ": the snapshot has " + ToString(saved.kind) + " '" + saved.plugin + "' here");
+    }
+    if (saved.failed) {  // stays off, as in the snapshot (its fault is in the snapshot's list)
+      if (!p.failed) {
+        p.failed = true;
+        for (const JointImpl* j : p.joints) StopMotor(*j);
+      }
+      continue;
+    }
+    if (p.failed) throw PluginError(who + " failed while this world was built; in the snapshot it runs");
+    if (saved.version != p.version) {
+      p.context->log().Warning("restoring state saved by version " + saved.version + " into version " + p.version);
+    }
+    try {
+      p.component->RestoreState(saved.state);
+    } catch (const std::exception& e) {
+      throw PluginError(who + " (" + p.file + ") refused its saved state: " + e.what());
+    } catch (...) {
+      throw PluginError(who + " (" + p.file + ") refused its saved state: " + kNotStd);
+    }
+  }
 }
 
 }  // namespace ubersim::kernel

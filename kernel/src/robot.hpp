@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "ubersim/component.hpp"
+#include "ubersim/kernel/fault.hpp"
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/model.hpp"
 #include "ubersim/kernel/plugin_registry.hpp"
@@ -20,11 +21,24 @@ struct RobotServices {
   double ball_radius = 0.0215;   ///< m
   Vec3 gravity = Vec3(0, 0, -9.81);
   const std::int64_t* sim_time_ns = nullptr;  ///< the world's clock
+  FaultMonitor* faults = nullptr;              ///< where plugin faults are reported
+  const LastGoodState* last_good = nullptr;    ///< what bodies a fault broke are put back to
+};
+
+/// One part's state as a snapshot keeps it.
+struct PartState {
+  PluginKind kind = PluginKind::kDrive;  ///< drive, dribbler or kicker
+  std::string plugin;                    ///< plugin id
+  std::string version;                   ///< the plugin's version when saved
+  bool failed = false;                   ///< switched off after a fault
+  std::string state;                     ///< what the component's SaveState returned
 };
 
 /// A robot: its node, chassis built from the model's body block, and its drive, dribbler and
-/// kicker plugins, each with its own context. A component that throws while stepping is
-/// reported once and switched off; the rest of the world carries on.
+/// kicker plugins, each with its own context. Every call into a plugin is guarded: a part that
+/// throws where it may not, or leaves a non-finite value behind, is reported once to the
+/// world's FaultMonitor and switched off (its motors stopped, its contact handlers silenced), and
+/// what it broke is put back to the last good state; the robot carries on without it.
 class Robot {
  public:
   /// Builds the chassis under `team_node` and creates and configures the plugins.
@@ -53,14 +67,39 @@ class Robot {
   /// Ground truth.
   RobotState State() const;
 
+  /// Reports and puts back the robot's non-finite bodies, found in `step` where no plugin call
+  /// can be blamed (`when`: "after the physics step", …; `what`: the state check's finding). A
+  /// robot found so in two steps running is taken off the field.
+  void RepairNonFinite(const char* when, std::int64_t step, const std::string& what);
+  /// Every part's state (SaveState); throws PluginError naming the part when one throws.
+  std::vector<PartState> SaveParts() const;
+  /// Puts back what SaveParts returned (RestoreState, parts that were switched off switched off
+  /// again); throws PluginError naming the part that refuses, or when the parts differ.
+  void RestoreParts(const std::vector<PartState>& parts);
+
  private:
   class Context;
   struct Part;
   void RunPhase(bool pre, const StepInfo& step);
+  // Switches a part off after a fault and reports it (once).
+  void Fail(Part& part, const std::string& phase, const std::string& what);
+  // Runs `call` (a call into `part`), turning an escaping exception into a fault of `phase`,
+  // then checks what it may have broken. False when the part failed.
+  template <typename F>
+  bool Guarded(Part& part, const char* phase, F&& call);
+  // As Guarded for a query (TouchesBall, Ready), which changes nothing to check afterwards.
+  template <typename F>
+  void Queried(Part& part, const char* phase, F&& call) const;
+  // After a call into `part`: a non-finite value left in the robot or the ball is its fault.
+  void CheckAfter(Part& part, const char* phase);
+  // Puts the robot's and the ball's non-finite bodies back to the last good state.
+  void Repair();
   void BuildCylinderChassis(const RobotPlacement& placement);
   void BuildUrdfBodies(const RobotPlacement& placement);
 
   RobotId id_;
+  const RobotServices& services_;
+  PrefixedLog log_;
   std::shared_ptr<const RobotModel> model_;
   NodeImpl* node_ = nullptr;
   BodyImpl* chassis_ = nullptr;
@@ -70,6 +109,8 @@ class Robot {
   Drive* drive_ = nullptr;
   Dribbler* dribbler_ = nullptr;
   Kicker* kicker_ = nullptr;
+  BodyWatch watch_;               // the robot's bodies and the ball, checked after each plugin call
+  std::int64_t repaired_at_ = -2;  // the last step the kernel had to repair it in
 };
 
 }  // namespace ubersim::kernel

@@ -14,6 +14,7 @@ RunStatus RunWorld(World& world, const RunOptions& options, const std::atomic<bo
   control.speed_factor = std::max(0.0, options.speed_factor);
   control.paused = options.start_paused;
   const auto duration_ns = static_cast<std::int64_t>(options.duration * 1e9 + 0.5);
+  const std::int64_t start_ns = world.clock().time_ns();
 
   Pacer pacer;
   RunStatus status;
@@ -36,8 +37,9 @@ RunStatus RunWorld(World& world, const RunOptions& options, const std::atomic<bo
   // Events posted before the loop (a transport pausing the world as it starts) apply before
   // the first step.
   world.ProcessEvents();
-  while (!stop.load(std::memory_order_relaxed)) {
-    if (duration_ns > 0 && world.clock().time_ns() >= duration_ns) break;
+  while (!stop.load(std::memory_order_relaxed) && !world.stopped()) {
+    if (options.between_steps) options.between_steps();
+    if (duration_ns > 0 && world.clock().time_ns() - start_ns >= duration_ns) break;
     if (Clock::now() - last_report >= report_every) report(false);
     if (control.paused && control.pending_steps == 0) {
       world.ProcessEvents();

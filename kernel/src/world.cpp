@@ -11,6 +11,7 @@
 #include "ubersim/error.hpp"
 #include "ubersim/kernel/field_builder.hpp"
 #include "ubersim/kernel/logging.hpp"
+#include "ubersim/kernel/state_check.hpp"
 #include "robot.hpp"
 
 namespace ubersim::kernel {
@@ -43,8 +44,9 @@ std::string Describe(const RobotId& id) {
 class TransportHost final : public TransportContext {
  public:
   TransportHost(const TransportModel& model, World& world, Log& log, EventSink& events,
-                const FieldGeometry& field, const std::string& world_name)
+                const FieldGeometry& field, const std::string& world_name, FaultMonitor& faults)
       : world_(world),
+        faults_(faults),
         plugin_(model.plugin),
         params_(model.params),
         log_(log, "transport " + model.plugin),
@@ -64,8 +66,9 @@ class TransportHost final : public TransportContext {
     return out;
   }
 
-  void Start(std::shared_ptr<Transport> t) {
+  void Start(std::shared_ptr<Transport> t, std::string file) {
     transport_ = std::move(t);
+    file_ = std::move(file);
     try {
       transport_->Start(*this);
       started_ = true;
@@ -84,16 +87,28 @@ class TransportHost final : public TransportContext {
     }
     transport_.reset();
   }
-  // Runs f against the transport; a throwing transport is reported once and switched off.
+  // Runs f against the transport; a throwing transport is a fault: reported once and switched
+  // off (its threads keep running until the world stops it, but it is never called again).
   template <typename F>
   void Guarded(const char* phase, F&& f) {
     if (!started_ || failed_) return;
+    std::string what;
     try {
       f(*transport_);
+      return;
     } catch (const std::exception& e) {
-      failed_ = true;
-      log_.Error(std::string(phase) + " threw: " + e.what() + "; this transport is switched off");
+      what = "threw " + ExceptionText(e);
+    } catch (...) {
+      what = "threw an exception that is not a std::exception";
     }
+    failed_ = true;
+    PluginFault fault;
+    fault.kind = PluginKind::kTransport;
+    fault.plugin = plugin_;
+    fault.file = file_;
+    fault.phase = phase;
+    fault.what = what;
+    faults_.Report(std::move(fault));
   }
   std::string Endpoint() const {
     return plugin_ + (transport_ ? ": " + transport_->Endpoint() : std::string());
@@ -101,7 +116,9 @@ class TransportHost final : public TransportContext {
 
  private:
   const World& world_;
+  FaultMonitor& faults_;
   std::string plugin_;
+  std::string file_;
   ParamView params_;
   PrefixedLog log_;
   EventSink& events_;
@@ -120,20 +137,25 @@ World::World(const WorldModel& model, PluginRegistry& registry, Log& log, bool s
       clock_(model.physics.step),
       ode_random_seed_(static_cast<unsigned long>(model.seed)),
       perception_(model.perception, model.seed),
-      radio_(model.radio, model.seed) {
+      radio_(model.radio, model.seed),
+      faults_(ParseFaultPolicy(model.on_plugin_fault), log) {
   if (!model_.field || !model_.ball) throw std::runtime_error("world has no field or ball model");
   field_geometry_ = model_.field->geometry;
   Build();
   if (start_transports_) {
     for (const TransportModel& tm : model_.transports) {
       auto host = std::make_unique<TransportHost>(tm, *this, log_, events_, field_geometry_,
-                                                  model_.name);
-      host->Start(registry_.CreateTransport(tm.plugin));
+                                                  model_.name, faults_);
+      std::shared_ptr<Transport> transport = registry_.CreateTransport(tm.plugin);
+      host->Start(std::move(transport), registry_.Find(PluginKind::kTransport, tm.plugin).file.string());
       transports_.push_back(std::move(host));
     }
   }
   // The state before the first step, so a world started paused is seen (a viewer draws it).
   PublishSnapshot();
+  // A fault while building (a part's Configure, a transport's first Publish) under the stop
+  // policy: the world is complete but takes no step; its caller saves and reports it.
+  stopped_ = faults_.stop_requested();
 }
 
 void World::PublishSnapshot() {
@@ -185,6 +207,8 @@ void World::Build() {
   services.ball_radius = model_.ball->radius;
   services.gravity = ph.gravity;
   services.sim_time_ns = &sim_time_ns_;
+  services.faults = &faults_;
+  services.last_good = &last_good_;
   for (const RobotPlacement& p : model_.robots) {
     if (FindRobot(p.id)) {
       throw std::runtime_error(model_.file + ": robot " + Describe(p.id) + " is placed twice");
@@ -192,9 +216,17 @@ void World::Build() {
     NodeImpl& team = p.id.team == Team::kBlue ? blue : yellow;
     robots_.push_back(std::make_unique<Robot>(p, team, registry_, log_, services));
   }
+  last_good_.Track(scene_->Root());
 }
 
 void World::Reset() {
+  Rebuild();
+  log_.Info("world reset to " + model_.file);
+  PublishSnapshot();  // seen at once, also while paused
+  stopped_ = faults_.stop_requested();
+}
+
+void World::Rebuild() {
   robots_.clear();
   collision_.reset();
   scene_.reset();
@@ -205,9 +237,10 @@ void World::Reset() {
   ode_random_seed_ = static_cast<unsigned long>(model_.seed);
   perception_.Reset();
   radio_.Reset();
+  faults_.Clear();
+  stopped_ = false;
+  faults_.SetNow(0, 0);
   Build();
-  log_.Info("world reset to " + model_.file);
-  PublishSnapshot();  // seen at once, also while paused
 }
 
 Robot* World::FindRobot(const RobotId& id) const {
@@ -407,6 +440,11 @@ ObjectState World::Query(const Target& t) const {
 }
 
 void World::Step() {
+  if (stopped_) return;
+  faults_.SetNow(clock_.steps(), clock_.time_ns());
+  // Whatever touched the bodies since the last step (nothing should) is not the fault of the
+  // plugin called next: repaired here, each plugin call then answers for itself.
+  if (!last_good_.AllFinite()) RepairNonFinite("before the step");
   auto t0 = SteadyClock::now();
   for (auto& t : transports_) t->Guarded("Poll", [](Transport& tr) { tr.Poll(); });
   timings_.transports_ns += ElapsedNs(t0);
@@ -438,6 +476,11 @@ void World::Step() {
   t0 = SteadyClock::now();
   for (auto& r : robots_) r->PostStep(after);
   timings_.plugins_ns += ElapsedNs(t0);
+  // The last good state, or the repair when something went non-finite nonetheless.
+  if (!last_good_.CaptureIfFinite()) {
+    RepairNonFinite("after the physics step");
+    last_good_.CaptureIfFinite();
+  }
 
   // One snapshot serves the cameras and the transports, and is taken only when one needs it.
   std::optional<WorldSnapshot> snapshot;
@@ -461,6 +504,27 @@ void World::Step() {
     }
   }
   timings_.transports_ns += ElapsedNs(t0);
+  // Under the stop policy a fault in this step ends the run here, with the step complete.
+  if (faults_.stop_requested()) stopped_ = true;
+}
+
+void World::RepairNonFinite(const char* when) {
+  // The kernel's state checks name what went non-finite: a robot (its bodies are its own, so it
+  // is reported and repaired as one) or the ball.
+  StateCheckOptions finite_only;
+  finite_only.speed = finite_only.carpet = finite_only.walls = finite_only.overlap = false;
+  for (const StateViolation& v : CheckState(*this, finite_only)) {
+    Robot* robot = v.object.kind == StateObject::Kind::kRobot ? FindRobot(v.object.robot) : nullptr;
+    if (robot) {
+      robot->RepairNonFinite(when, clock_.steps(), v.Describe());
+      continue;
+    }
+    PluginFault fault;
+    fault.phase = when;
+    fault.what = v.Describe();
+    faults_.Report(std::move(fault));
+  }
+  kernel::RepairNonFinite(scene_->Root(), last_good_);
 }
 
 WorldSnapshot World::Snapshot() const {

@@ -455,6 +455,7 @@ struct ModelLoader::Impl {
           p.GetDouble("contact_max_correcting_velocity", m.contact_max_correcting_velocity);
     }
     w.seed = static_cast<std::uint64_t>(v.GetInt("seed", static_cast<std::int64_t>(w.seed)));
+    w.on_plugin_fault = v.GetString("on_plugin_fault", w.on_plugin_fault);
 
     if (v.Has("plugin_paths")) {
       const ParamView paths = v["plugin_paths"];

@@ -26,6 +26,9 @@ namespace {
 
 using ubersim::Vec3;
 
+// Layout of SaveState's bytes: bump when they change.
+constexpr std::uint32_t kStateLayout = 1;
+
 class RollerDribbler final : public ubersim::Dribbler {
  public:
   void Configure(ubersim::RobotContext& ctx) override {
@@ -160,6 +163,20 @@ class RollerDribbler final : public ubersim::Dribbler {
   void Reset() override {
     speed_ = 0.0;
     touched_ = false;
+  }
+
+  // The commanded speed, the last step's ball contact (read before the next step's contacts) and
+  // the step length the coating's contacts use.
+  std::string SaveState() const override {
+    return ubersim::StateWriter(kStateLayout).Double(speed_).Bool(touched_).Double(dt_).Take();
+  }
+
+  void RestoreState(std::string_view state) override {
+    ubersim::StateReader r(state, kStateLayout, "roller dribbler");
+    speed_ = r.Double();
+    touched_ = r.Bool();
+    dt_ = r.Double();
+    r.Finish();
   }
 
   void PreStep(const ubersim::StepInfo& step) override {

@@ -27,6 +27,8 @@ using ubersim::Vec3;
 constexpr double kGlobalLateralTolerance = 0.01;
 // At most one "lateral part dropped" warning per this much simulated time, s.
 constexpr double kWarningInterval = 1.0;
+// Layout of SaveState's bytes: bump when they change.
+constexpr std::uint32_t kStateLayout = 1;
 
 // Warns about dropped lateral commands: the first at once, then at most one per interval, each
 // saying how many were dropped since the previous warning.
@@ -41,6 +43,12 @@ class LateralWarning {
     warned_ = true;
     last_ = now;
     dropped_ = 0;
+  }
+  void Save(ubersim::StateWriter& w) const { w.Bool(warned_).Double(last_).Int(dropped_); }
+  void Restore(ubersim::StateReader& r) {
+    warned_ = r.Bool();
+    last_ = r.Double();
+    dropped_ = static_cast<int>(r.Int());
   }
 
  private:
@@ -143,6 +151,24 @@ class DiffDrive final : public ubersim::Drive {
   void Reset() override {
     watchdog_.Reset();
     servo_.Reset();
+  }
+
+  // The servo loop's memory, the step length the casters' contacts use, and the warning's pace.
+  std::string SaveState() const override {
+    ubersim::StateWriter w(kStateLayout);
+    w.Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_).Double(dt_);
+    lateral_warning_.Save(w);
+    return w.Take();
+  }
+
+  void RestoreState(std::string_view state) override {
+    ubersim::StateReader r(state, kStateLayout, "diff drive");
+    r.Watchdog(watchdog_);
+    servo_.Set(r.Setpoint());
+    command_ = r.Move();
+    dt_ = r.Double();
+    lateral_warning_.Restore(r);
+    r.Finish();
   }
 
   void PreStep(const ubersim::StepInfo& step) override {

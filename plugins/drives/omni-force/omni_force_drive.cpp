@@ -55,6 +55,8 @@ constexpr double kGripHeight = 0.002;
 constexpr double kSettle = 0.0005;
 // Largest yaw gain of the wheel servos (1 reaches the target in one step, 2 oscillates forever).
 constexpr double kMaxYawGain = 1.8;
+// Layout of SaveState's bytes: bump when they change.
+constexpr std::uint32_t kStateLayout = 1;
 
 class OmniForceDrive final : public ubersim::Drive {
  public:
@@ -183,6 +185,30 @@ class OmniForceDrive final : public ubersim::Drive {
   void Reset() override {
     watchdog_.Reset();
     servo_.Reset();
+  }
+
+  // The servo loop's memory and each wheel's friction as its last contact resolved it (the next
+  // step's wheel forces are limited by it before this step's contacts exist).
+  std::string SaveState() const override {
+    ubersim::StateWriter w(kStateLayout);
+    w.Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_).Int(static_cast<std::int64_t>(wheels_.size()));
+    for (const Wheel& wheel : wheels_) w.Double(wheel.mu_roll).Double(wheel.mu_axle);
+    return w.Take();
+  }
+
+  void RestoreState(std::string_view state) override {
+    ubersim::StateReader r(state, kStateLayout, "omni_force drive");
+    r.Watchdog(watchdog_);
+    servo_.Set(r.Setpoint());
+    command_ = r.Move();
+    if (r.Int() != static_cast<std::int64_t>(wheels_.size())) {
+      throw ubersim::PluginError("omni_force drive: saved state is of a robot with another number of wheels");
+    }
+    for (Wheel& wheel : wheels_) {
+      wheel.mu_roll = r.Double();
+      wheel.mu_axle = r.Double();
+    }
+    r.Finish();
   }
 
   void PreStep(const ubersim::StepInfo& step) override {

@@ -21,6 +21,9 @@ namespace {
 
 using ubersim::Vec3;
 
+// Layout of SaveState's bytes: bump when they change.
+constexpr std::uint32_t kStateLayout = 1;
+
 struct Wheel {
   double angle = 0;            // rad, from forward, counter-clockwise
   Vec3 tangent;                // rolling direction in the robot frame (counter-clockwise)
@@ -118,6 +121,19 @@ class OmniDrive final : public ubersim::Drive {
   void Reset() override {
     watchdog_.Reset();
     servo_.Reset();
+  }
+
+  // The servo loop's memory; the wheels' motor settings and bodies are the kernel's to save.
+  std::string SaveState() const override {
+    return ubersim::StateWriter(kStateLayout).Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_).Take();
+  }
+
+  void RestoreState(std::string_view state) override {
+    ubersim::StateReader r(state, kStateLayout, "omni drive");
+    r.Watchdog(watchdog_);
+    servo_.Set(r.Setpoint());
+    command_ = r.Move();
+    r.Finish();
   }
 
   void PreStep(const ubersim::StepInfo& step) override {

@@ -10,7 +10,6 @@
 // the capacitors recharge for `recharge_time`.
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <string>
 
 #include <ubersim/ubersim.hpp>
@@ -20,6 +19,9 @@
 namespace {
 
 using ubersim::Vec3;
+
+// Layout of SaveState's bytes: bump when they change.
+constexpr std::uint32_t kStateLayout = 1;
 
 class SolenoidKicker final : public ubersim::Kicker {
  public:
@@ -64,17 +66,25 @@ class SolenoidKicker final : public ubersim::Kicker {
     TryFire();
   }
 
+  // Arming and charge: doubles bit for bit (printed numbers would depend on the locale).
   std::string SaveState() const override {
-    std::ostringstream s;
-    s.precision(17);
-    s << armed_ << ' ' << chip_ << ' ' << speed_ << ' ' << armed_until_ << ' ' << charged_at_;
-    return s.str();
+    return ubersim::StateWriter(kStateLayout)
+        .Bool(armed_)
+        .Bool(chip_)
+        .Double(speed_)
+        .Double(armed_until_)
+        .Double(charged_at_)
+        .Take();
   }
 
   void RestoreState(std::string_view state) override {
-    std::istringstream s{std::string(state)};
-    s >> armed_ >> chip_ >> speed_ >> armed_until_ >> charged_at_;
-    if (!s) throw ubersim::PluginError("solenoid kicker: unreadable saved state");
+    ubersim::StateReader r(state, kStateLayout, "solenoid kicker");
+    armed_ = r.Bool();
+    chip_ = r.Bool();
+    speed_ = r.Double();
+    armed_until_ = r.Double();
+    charged_at_ = r.Double();
+    r.Finish();
   }
 
  private:

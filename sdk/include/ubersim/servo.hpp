@@ -123,6 +123,15 @@ class CommandWatchdog {
   bool Fresh(double now) const { return has_command_ && now - last_ <= timeout_; }
   /// Forgets the last command.
   void Reset() { has_command_ = false; }
+  /// When the last command arrived, s (meaningful while HasCommand()).
+  double LastFeed() const { return last_; }
+  /// True once a command arrived (since the last Reset).
+  bool HasCommand() const { return has_command_; }
+  /// Puts back what LastFeed and HasCommand returned (a restored snapshot).
+  void Restore(double last_feed, bool has_command) {
+    last_ = last_feed;
+    has_command_ = has_command;
+  }
 
  private:
   double timeout_;

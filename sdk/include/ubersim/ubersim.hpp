@@ -9,6 +9,7 @@
 #include "ubersim/plugin.hpp"
 #include "ubersim/scene.hpp"
 #include "ubersim/servo.hpp"
+#include "ubersim/state_io.hpp"
 #include "ubersim/transport.hpp"
 #include "ubersim/version.hpp"
 #include "ubersim/wheel.hpp"

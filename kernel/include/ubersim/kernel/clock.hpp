@@ -17,6 +17,8 @@ class SimClock {
   void Advance() { ++steps_; time_ns_ += step_ns_; }
   /// Back to 0.
   void Reset() { steps_ = 0; time_ns_ = 0; }
+  /// Sets the step count and time (a restored snapshot).
+  void Restore(std::int64_t steps, std::int64_t time_ns) { steps_ = steps; time_ns_ = time_ns; }
   std::int64_t steps() const { return steps_; }          ///< steps taken
   std::int64_t time_ns() const { return time_ns_; }      ///< simulated time, ns
   double seconds() const { return 1e-9 * static_cast<double>(time_ns_); }  ///< simulated time, s

@@ -135,6 +135,9 @@ struct WorldModel {
   std::vector<MaterialPair> material_pairs;  ///< contact table
   PerceptionModel perception;                ///< cameras, frame rate, latency, noise, drop-outs
   RadioModel radio;                          ///< command latency and loss
+  /// What a plugin fault does: "stop" (the default: the world stops after the step, state
+  /// saved) or "disable" (the plugin is switched off and the world carries on); fault.hpp.
+  std::string on_plugin_fault = "stop";
 };
 
 /// Gives the JSON Schema of a plugin's parameter block, or throws std::runtime_error saying why

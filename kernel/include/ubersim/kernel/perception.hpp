@@ -5,6 +5,7 @@
 #include <deque>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ubersim/math.hpp"
@@ -41,6 +42,22 @@ struct RadioModel {
   double loss = 0.0;             ///< probability a command is lost
 };
 
+/// What a perception pipeline carries from one step to the next (snapshots).
+struct PerceptionState {
+  PerceptionModel model;                    ///< as realism events left it (cameras and rate fixed)
+  std::vector<std::int64_t> next_capture_ns;  ///< per camera
+  std::vector<std::uint32_t> frame_numbers;   ///< per camera
+  std::vector<VisionFrame> in_flight;         ///< frames waiting out the latency, oldest first
+  std::string rng;                          ///< the noise generator's state (std::mt19937_64's text form)
+};
+
+/// What a radio link carries from one step to the next (snapshots).
+struct RadioState {
+  RadioModel model;                                          ///< as realism events left it
+  std::vector<std::pair<std::int64_t, CommandEvent>> queue;  ///< commands in flight: due time, command
+  std::string rng;                                           ///< the loss generator's state
+};
+
 /// Defaults of a preset ("ideal", "2003", "realistic"); false for an unknown name.
 bool PerceptionPreset(const std::string& name, PerceptionModel& model);
 /// Defaults of a radio preset; false for an unknown name.
@@ -68,6 +85,10 @@ class PerceptionPipeline {
   void Configure(const PerceptionModel& model);
   /// The configuration.
   const PerceptionModel& model() const { return model_; }
+  /// Everything it carries between steps.
+  PerceptionState SaveState() const;
+  /// Puts back what SaveState returned; throws std::invalid_argument when the cameras differ.
+  void RestoreState(const PerceptionState& state);
 
  private:
   VisionFrame Frame(std::size_t camera, const WorldSnapshot& truth);
@@ -97,6 +118,10 @@ class RadioLink {
   void Configure(const RadioModel& model);
   /// The configuration.
   const RadioModel& model() const { return model_; }
+  /// Everything it carries between steps.
+  RadioState SaveState() const;
+  /// Puts back what SaveState returned; throws std::invalid_argument when it is unreadable.
+  void RestoreState(const RadioState& state);
 
  private:
   RadioModel model_;

@@ -10,10 +10,15 @@ namespace ubersim::kernel {
 
 /// How a run loop goes.
 struct RunOptions {
-  double duration = 0.0;      ///< stop after this much simulated time, s; 0: until stopped
+  /// Stop after this much simulated time from the run's start (a restored world's time counts
+  /// from its snapshot), s; 0: until stopped.
+  double duration = 0.0;
   double speed_factor = 1.0;  ///< sim s per wall s at start; 0: as fast as possible
   bool start_paused = false;  ///< start paused (clock events resume it)
   double status_interval = 0.5;  ///< wall seconds between status callbacks
+  /// Called between steps on the run's thread, also while paused (save a snapshot on request,
+  /// keep the crash report's copy fresh); may be empty.
+  std::function<void()> between_steps;
 };
 
 /// What the status callback gets.
@@ -26,8 +31,8 @@ struct RunStatus {
 };
 
 /// Steps a world against the wall clock (or as fast as possible), obeying pause, single step,
-/// speed and reset from clock events, until the duration is reached or `stop` becomes true.
-/// Returns the final status.
+/// speed and reset from clock events, until the duration is reached, `stop` becomes true or a
+/// plugin fault stops the world (World::stopped). Returns the final status.
 RunStatus RunWorld(World& world, const RunOptions& options, const std::atomic<bool>& stop,
                    const std::function<void(const RunStatus&)>& on_status);
 

@@ -13,6 +13,7 @@
 #include "ubersim/kernel/clock.hpp"
 #include "ubersim/kernel/collision.hpp"
 #include "ubersim/kernel/event_queue.hpp"
+#include "ubersim/kernel/fault.hpp"
 #include "ubersim/kernel/model.hpp"
 #include "ubersim/kernel/ode_handles.hpp"
 #include "ubersim/kernel/perception.hpp"
@@ -24,6 +25,7 @@ namespace ubersim::kernel {
 class Robot;
 class TransportHost;
 struct RobotServices;
+struct SavedState;
 
 /// Where a step's wall time went, accumulated since the start, ns.
 struct StepTimings {
@@ -44,7 +46,8 @@ struct EventCounters {
 
 /// One simulated world: ODE world, scene graph, collision manager, field, ball, robots with
 /// their plugins, transports, events and the clock. Deterministic: the same model, seed and
-/// events give bit-identical states.
+/// events give bit-identical states. A plugin fault (fault.hpp) switches the plugin off and puts
+/// back what it broke; under the world file's `on_plugin_fault: stop` the world then stops.
 class World {
  public:
   /// Builds everything the model describes, loading plugins through `registry`. Throws
@@ -56,12 +59,29 @@ class World {
   World& operator=(const World&) = delete;
 
   /// One physics step: apply queued events, components' PreStep, collide, QuickStep, PostStep,
-  /// answer queries, publish to transports.
+  /// answer queries, publish to transports. Does nothing once the world has stopped.
   void Step();
   /// Applies queued events and answers queries without stepping (while paused).
   void ProcessEvents();
   /// Puts everything back where the world file has it; the clock restarts at 0.
   void Reset();
+
+  /// The world's full state now (a step boundary), for a snapshot file. Throws PluginError
+  /// naming the part whose SaveState throws.
+  SavedState Save() const;
+  /// Rebuilds the world and puts `state` into it: stepping on gives what the saved world would
+  /// have given, bit for bit. Throws SnapshotError when the state is of another world (another
+  /// name, other bodies, robots, parts or physics) or a part refuses its saved state; the world
+  /// is then as freshly built. A world restored after a fault stop steps again.
+  void Restore(const SavedState& state);
+
+  /// True once a plugin fault under `on_plugin_fault: stop` stopped the world (the step it
+  /// happened in was finished without the plugin); Step does nothing from then on.
+  bool stopped() const { return stopped_; }
+  /// Every plugin fault so far, oldest first.
+  const std::vector<PluginFault>& faults() const { return faults_.faults(); }
+  /// The world file's fault policy.
+  FaultPolicy fault_policy() const { return faults_.policy(); }
 
   /// Where to post events (thread-safe).
   EventQueue& events() { return events_; }
@@ -102,6 +122,13 @@ class World {
 
  private:
   void Build();
+  // Reset without telling the transports (Reset and Restore).
+  void Rebuild();
+  // Bodies that went non-finite where no plugin call can be blamed (`when`: "after the physics
+  // step", "before the step") are put back to the last good state and reported.
+  void RepairNonFinite(const char* when);
+  // A digest of what decides the trajectory besides the state: bodies, robots, physics.
+  std::uint64_t StructureDigest() const;
   // Hands the transports the state as it is (at start and after a reset, without a step).
   void PublishSnapshot();
   void ApplyEvents(bool stepping);
@@ -140,6 +167,9 @@ class World {
   PerceptionPipeline perception_;
   RadioLink radio_;
   std::function<void(const VisionFrame&)> vision_observer_;
+  FaultMonitor faults_;
+  LastGoodState last_good_;
+  bool stopped_ = false;
 };
 
 }  // namespace ubersim::kernel

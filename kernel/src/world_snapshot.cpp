@@ -1,0 +1,171 @@
+// SPDX-License-Identifier: Apache-2.0
+// World::Save and World::Restore: the world's state to and from a SavedState (snapshot.hpp).
+#include <cstring>
+#include <ctime>
+#include <set>
+
+#include "ubersim/error.hpp"
+#include "ubersim/kernel/ode_state.hpp"
+#include "ubersim/kernel/snapshot.hpp"
+#include "ubersim/kernel/world.hpp"
+#include "robot.hpp"
+
+#ifndef UBERSIM_VERSION
+#define UBERSIM_VERSION "unknown"
+#endif
+
+namespace ubersim::kernel {
+namespace {
+
+void Mix(std::uint64_t& h, const void* data, std::size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ULL;
+  }
+}
+void Mix(std::uint64_t& h, double v) { Mix(h, &v, sizeof v); }
+void Mix(std::uint64_t& h, const std::string& s) {
+  Mix(h, s.data(), s.size());
+  Mix(h, "", 1);
+}
+
+// The files the world was built from, as the model names them (code-built models name none).
+std::vector<ModelFileDigest> ModelFiles(const WorldModel& m) {
+  std::vector<std::string> paths = {m.file, m.field->file, m.ball->file};
+  for (const RobotPlacement& p : m.robots) {
+    paths.push_back(p.model->file);
+    if (!p.model->urdf_file.empty()) paths.push_back(p.model->urdf_file);
+  }
+  std::vector<ModelFileDigest> out;
+  std::set<std::string> seen;
+  for (const std::string& path : paths) {
+    if (!seen.insert(path).second) continue;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) continue;
+    out.push_back(ModelFileDigest{path, FileDigest(path)});
+  }
+  return out;
+}
+
+std::string NowUtc() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
+
+std::string Name(const RobotId& id) { return std::string(ToString(id.team)) + " " + std::to_string(id.id); }
+
+}  // namespace
+
+std::uint64_t World::StructureDigest() const {
+  std::uint64_t h = SceneDigest(*scene_);
+  Mix(h, model_.name);
+  const PhysicsModel& p = model_.physics;
+  for (double v : {static_cast<double>(clock_.step_ns()), static_cast<double>(p.solver_iterations), p.erp, p.cfm,
+                   p.gravity.x(), p.gravity.y(), p.gravity.z(), static_cast<double>(p.max_contacts),
+                   p.contact_surface_layer, p.contact_max_correcting_velocity}) {
+    Mix(h, v);
+  }
+  Mix(h, p.broadphase);
+  for (const RobotPlacement& r : model_.robots) {
+    Mix(h, Name(r.id));
+    Mix(h, r.model->name);
+  }
+  Mix(h, static_cast<double>(perception_.model().cameras.size()));
+  Mix(h, perception_.model().frame_rate);
+  return h;
+}
+
+SavedState World::Save() const {
+  SavedState s;
+  s.world_name = model_.name;
+  s.world_file = model_.file;
+  s.structure = StructureDigest();
+  s.model_files = ModelFiles(model_);
+  s.ubersim_version = UBERSIM_VERSION;
+  s.created_utc = NowUtc();
+  s.step = clock_.steps();
+  s.time_ns = clock_.time_ns();
+  s.step_ns = clock_.step_ns();
+  s.ode_random_seed = ode_random_seed_;
+  CaptureOdeState(*scene_, s);
+  for (const auto& r : robots_) {
+    SavedRobot saved;
+    saved.id = r->id();
+    saved.present = r->present();
+    for (PartState& p : r->SaveParts()) {
+      saved.parts.push_back(SavedPart{p.kind, std::move(p.plugin), std::move(p.version), p.failed, std::move(p.state)});
+    }
+    s.robots.push_back(std::move(saved));
+  }
+  s.perception = perception_.SaveState();
+  s.radio = radio_.SaveState();
+  s.faults = faults_.faults();
+  return s;
+}
+
+void World::Restore(const SavedState& s) {
+  const std::string theirs = "world '" + s.world_name + "' (" + s.world_file + ")";
+  const std::string ours = "world '" + model_.name + "' (" + model_.file + ")";
+  if (s.world_name != model_.name) throw SnapshotError("the snapshot is of " + theirs + ", not of " + ours);
+  if (s.step_ns != clock_.step_ns()) {
+    throw SnapshotError("the snapshot's physics step is " + std::to_string(s.step_ns) + " ns, this world's " +
+                        std::to_string(clock_.step_ns()) + " ns");
+  }
+  if (s.robots.size() != robots_.size()) {
+    throw SnapshotError("the snapshot has " + std::to_string(s.robots.size()) + " robots, " + ours + " " +
+                        std::to_string(robots_.size()));
+  }
+  for (std::size_t i = 0; i < robots_.size(); ++i) {
+    if (!(s.robots[i].id == robots_[i]->id())) {
+      throw SnapshotError("robot " + std::to_string(i) + " is " + Name(s.robots[i].id) + " in the snapshot, " +
+                          Name(robots_[i]->id()) + " in " + ours);
+    }
+  }
+  // Files edited since the snapshot: named whether the change is refused or only warned about.
+  std::string changed;
+  for (const ModelFileDigest& f : s.model_files) {
+    if (std::filesystem::exists(f.path) && FileDigest(f.path) != f.digest) changed += (changed.empty() ? "" : ", ") + f.path;
+  }
+  if (s.structure != StructureDigest()) {
+    throw SnapshotError("the snapshot's " + theirs + " has other bodies, geometries, masses or physics settings than " +
+                        ours + (changed.empty() ? std::string() : "; changed since the snapshot: " + changed));
+  }
+  if (!changed.empty()) {
+    log_.Warning("model files changed since the snapshot (" + changed +
+                 "): the world goes on from the snapshot's state, but not as the original would have");
+  }
+  if (s.world_file != model_.file) log_.Info("the snapshot was taken of " + s.world_file);
+
+  Rebuild();
+  try {
+    for (std::size_t i = 0; i < robots_.size(); ++i) {
+      std::vector<PartState> parts;
+      for (const SavedPart& p : s.robots[i].parts) parts.push_back(PartState{p.kind, p.plugin, p.version, p.failed, p.state});
+      robots_[i]->RestoreParts(parts);
+      robots_[i]->SetPresent(s.robots[i].present);
+    }
+    ApplyOdeState(*scene_, s);
+    perception_.RestoreState(s.perception);
+    radio_.RestoreState(s.radio);
+  } catch (const std::exception& e) {
+    Rebuild();  // as freshly built, not half restored
+    throw SnapshotError(std::string("cannot restore the snapshot into ") + ours + ": " + e.what());
+  }
+  clock_.Restore(s.step, s.time_ns);
+  sim_time_ns_ = s.time_ns;
+  ode_random_seed_ = static_cast<unsigned long>(s.ode_random_seed);
+  faults_.Restore(s.faults);
+  stopped_ = false;
+  last_good_.Track(scene_->Root());
+  log_.Info("restored the snapshot of step " + std::to_string(s.step) + " (" + std::to_string(1e-9 * s.time_ns) +
+            " s), taken " + s.created_utc + " by ubersim " + s.ubersim_version);
+  PublishSnapshot();
+  stopped_ = faults_.stop_requested();  // a transport failing on this first Publish
+}
+
+}  // namespace ubersim::kernel
