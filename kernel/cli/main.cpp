@@ -6,6 +6,7 @@
 #include <optional>
 #include <algorithm>
 #include <map>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
@@ -797,6 +798,7 @@ int SoakCommand(const std::vector<std::string>& args) {
        "how far into a wall a robot is teleported, as a share of the wall's thickness (0..1)")
       ("robot", po::value<std::string>(&robot), "put this robot model file in every robot's place")
       ("quiet,q", "no progress lines")
+      ("log-teleports", "print every teleport with its simulated time (to chase a finding)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
   physics_flags.AddTo(desc);
   po::options_description hidden;
@@ -838,6 +840,18 @@ int SoakCommand(const std::vector<std::string>& args) {
     options.seed = seed;
     options.teleport_interval = interval;
     options.wall_overlap = wall_overlap;
+    if (vm.count("log-teleports")) {
+      options.on_teleport = [](double t, const char* what, const PositionEvent& e) {
+        const std::string who = e.target.is_ball
+                                    ? std::string("ball")
+                                    : std::string(e.target.robot.team == Team::kBlue ? "robot blue " : "robot yellow ") +
+                                          std::to_string(e.target.robot.id);
+        const Vec3 p = e.position.value_or(Vec3::Constant(NAN));
+        const Vec3 v = e.velocity.value_or(Vec3::Zero());
+        std::printf("t = %.3f s: teleport (%s): %s to (%.3f, %.3f, %.3f) m, yaw %.3f rad, velocity (%.2f, %.2f, %.2f) m/s\n", t,
+                    what, who.c_str(), p.x(), p.y(), p.z(), e.yaw.value_or(0.0), v.x(), v.y(), v.z());
+      };
+    }
     std::printf("soak %s (%s): %.0f s simulated, seed %llu, %zu robots, physics step %.2f ms\n", model.name.c_str(),
                 file.string().c_str(), duration, static_cast<unsigned long long>(seed), model.robots.size(),
                 model.physics.step * 1e3);

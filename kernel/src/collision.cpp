@@ -433,6 +433,10 @@ void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
 }
 
 const SurfaceMaterial& CollisionManager::PairSurface(const GeomImpl& a, const GeomImpl& b) {
+  // A step touches a few hundred pairs; starting afresh when the cache is full costs one
+  // resolution per pair and keeps memory flat however long a run is.
+  constexpr std::size_t kMaxCachedSurfaces = 4096;
+  if (surfaces_.size() >= kMaxCachedSurfaces && !surfaces_.contains({&a, &b})) surfaces_.clear();
   auto [it, fresh] = surfaces_.try_emplace({&a, &b});
   CachedSurface& c = it->second;
   if (fresh || c.a_version != a.material_version() || c.b_version != b.material_version() ||

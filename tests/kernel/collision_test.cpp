@@ -272,6 +272,43 @@ TEST(CollisionManager, AChangedMaterialOrTableShowsInTheNextContacts) {
   EXPECT_DOUBLE_EQ(collide(), 0.25);
 }
 
+// The surface cache stays bounded when more pairs touch than it holds (a long run brings ever
+// new pairs of robot parts together), and the surfaces stay right across its clearing.
+TEST(CollisionManager, TheSurfaceCacheStaysBoundedAndRight) {
+  SmallScene s;
+  CollisionManager cm(s.graph, Broadphase::kSweepAndPrune, 4);
+  SurfaceMaterial carpet;
+  carpet.name = "carpet";
+  carpet.mu = 0.9;
+  s.graph.Root().AddChild("field").AddGeom(GeomSpec{"carpet", Shape::Plane(Vec3::UnitZ(), 0), {}, carpet, {}, true},
+                                           nullptr);
+  SurfaceMaterial rubber;
+  rubber.name = "rubber";
+  rubber.mu = 0.1;
+  // 100 spheres in one heap: 4950 pairs among them, 100 with the carpet.
+  std::vector<double> seen;
+  for (int i = 0; i < 100; ++i) {
+    SceneNode& n = s.graph.Root().AddChild("thing" + std::to_string(i));
+    BodySpec b;
+    b.name = "b";
+    b.mass = MassSpec::Solid(Shape::Sphere(0.05), 0.1);
+    b.pose.position = Vec3(0.001 * i, 0, 0.049);
+    Body& body = n.AddBody(b);
+    auto& g = static_cast<GeomImpl&>(n.AddGeom(GeomSpec{"s", Shape::Sphere(0.05), {}, rubber, {}, true}, &body));
+    if (i == 0) g.AddObserver([&](const Contact&, SurfaceMaterial& m, bool&) { seen.push_back(m.mu); });
+  }
+  for (int step = 0; step < 3; ++step) {
+    seen.clear();
+    cm.Collide();
+    cm.ClearContacts();
+    EXPECT_LE(cm.cached_surfaces(), 4096u);
+    ASSERT_EQ(seen.size(), 100u);  // 99 spheres and the carpet
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 0.1), 99);
+    EXPECT_EQ(std::count_if(seen.begin(), seen.end(), [](double mu) { return std::abs(mu - 0.3) < 1e-12; }), 1);
+  }
+  EXPECT_GT(cm.cached_surfaces(), 0u);
+}
+
 // A body whose box lies wholly above the carpet is never narrow-tested against it (a trimesh
 // chassis would test every vertex); one that reaches down to it is.
 std::size_t NarrowTestsWithBoxAt(double z) {

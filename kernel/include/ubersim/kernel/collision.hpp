@@ -112,6 +112,8 @@ class CollisionManager {
   void ClearContacts();
   /// Counters of the last Collide().
   const CollisionStats& stats() const { return stats_; }
+  /// How many pairs' resolved surfaces are cached now (bounded, however long the run).
+  std::size_t cached_surfaces() const { return surfaces_.size(); }
 
   /// True when the exclusion rules let a and b collide at all.
   static bool MayCollide(const GeomImpl& a, const GeomImpl& b);
@@ -162,6 +164,8 @@ class CollisionManager {
   // planes directly.
   std::vector<GeomImpl*> planes_;
   std::vector<GeomImpl*> planes_only_;
+  // Resolved surfaces of the pairs that touched lately. Bounded (collision.cpp): a long run
+  // brings ever new pairs of robot parts together, up to tens of thousands.
   std::unordered_map<std::pair<const GeomImpl*, const GeomImpl*>, CachedSurface, PairHash> surfaces_;
   SurfaceMaterial contact_surface_;  // reused per contact: no allocation once warm
 };
