@@ -125,7 +125,7 @@ bool RandomPlay::BeforeStep() {
       std::uniform_real_distribution<double> angle(-M_PI, M_PI);
       PositionEvent e;
       e.target = Target::Ball();
-      if (outside) e.position = Vec3(unit(rng_) * half_length_ * 0.8, unit(rng_) * half_width_ * 0.8, 0.0);
+      if (outside) e.position = FreeBallPoint(s);
       const double a = angle(rng_);
       e.velocity = Vec3(kBallSpeed * std::cos(a), kBallSpeed * std::sin(a), 0.0);
       world_.events().Post(e);
@@ -133,6 +133,20 @@ bool RandomPlay::BeforeStep() {
     }
   }
   return ball_moved;
+}
+
+Vec3 RandomPlay::FreeBallPoint(const WorldSnapshot& s) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const double ball_radius = world_.model().ball->radius;
+  Vec3 p = Vec3::Zero();
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    p = Vec3(unit(rng_) * half_length_ * 0.8, unit(rng_) * half_width_ * 0.8, 0.0);
+    const bool clear = std::none_of(s.robots.begin(), s.robots.end(), [&](const RobotState& r) {
+      return (r.pose.position - p).head<2>().norm() < r.radius + ball_radius + 0.05;
+    });
+    if (clear) return p;
+  }
+  return p;  // a field full of robots: the last try
 }
 
 WorldModel LoadTrialWorld(const ModelLoader& loader, const std::filesystem::path& file,

@@ -81,6 +81,9 @@ class RandomPlay {
     std::int64_t next_target_ns = 0;
   };
   void NewTarget(Player& p, std::int64_t now_ns);
+  // A random point on the field clear of every robot in `s`, for a ball that left it (a ball put
+  // inside a robot's shell could not get out).
+  Vec3 FreeBallPoint(const WorldSnapshot& s);
 
   World& world_;
   std::mt19937_64 rng_;

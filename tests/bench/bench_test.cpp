@@ -101,6 +101,32 @@ TEST_F(BenchWorld, RandomPlayDrivesEveryRobotAndKeepsTheBallMoving) {
   EXPECT_EQ(text.str(), "") << "every command accepted";
 }
 
+// A ball that left the field is put back clear of every robot: inside a robot's hollow shell it
+// could never get out (the soak once found one there).
+TEST_F(BenchWorld, RandomPlayPutsABallThatLeftTheFieldClearOfTheRobots) {
+  auto world = Make("div-b");
+  const double ball_radius = world->model().ball->radius;
+  PositionEvent out;
+  out.target = Target::Ball();
+  out.position = Vec3(20.0, 0.0, 0.0);
+  int placed = 0;
+  for (std::uint64_t seed = 0; seed < 1000; ++seed) {
+    world->events().Post(out);
+    world->ProcessEvents();
+    RandomPlay play(*world, seed);
+    if (!play.BeforeStep()) continue;
+    world->ProcessEvents();
+    ++placed;
+    const WorldSnapshot s = world->Snapshot();
+    ASSERT_LT(std::abs(s.ball.pose.position.x()), 10.0) << "seed " << seed << ": not put back";
+    for (const RobotState& r : s.robots) {
+      EXPECT_GE((r.pose.position - s.ball.pose.position).head<2>().norm(), r.radius + ball_radius)
+          << "seed " << seed << ": ball put inside robot " << r.id.id;
+    }
+  }
+  EXPECT_EQ(placed, 1000);
+}
+
 TEST_F(BenchWorld, ARunReportsItsSplitAndTheBaseline) {
   BenchOptions o;
   o.worlds = {UBERSIM_SOURCE_DIR "/models/worlds/ssl-2003.yaml"};
