@@ -86,6 +86,33 @@ const char* kTopHelp =
     "            or memory growth, 7 run: a plugin fault stopped the world (crash report\n"
     "            and snapshot written)\n";
 
+// Parses a command's `args` against `desc`, plus `hidden` and `positional` for its positional
+// arguments. Returns the exit code when the command ends here (a usage error: the message and
+// the options; --help: the options), nothing when it goes on.
+std::optional<int> ParseCommandLine(const std::vector<std::string>& args, const char* command,
+                                    const po::options_description& desc, po::variables_map& vm,
+                                    const po::options_description* hidden = nullptr,
+                                    const po::positional_options_description* positional = nullptr) {
+  po::options_description all;
+  all.add(desc);
+  if (hidden) all.add(*hidden);
+  try {
+    po::command_line_parser parser(args);
+    parser.options(all);
+    if (positional) parser.positional(*positional);
+    po::store(parser.run(), vm);
+    po::notify(vm);
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim " << command << ": " << e.what() << "\n\n" << desc << "\n";
+    return kExitUsage;
+  }
+  if (vm.count("help")) {
+    std::cout << desc << "\n";
+    return kExitOk;
+  }
+  return std::nullopt;
+}
+
 std::vector<fs::path> ToPaths(const std::vector<std::string>& v) {
   return std::vector<fs::path>(v.begin(), v.end());
 }
@@ -189,20 +216,8 @@ int RunCommand(const std::vector<std::string>& args) {
   hidden.add_options()("world", po::value<std::string>(&world_arg));
   po::positional_options_description pos;
   pos.add("world", 1);
-  po::options_description all;
-  all.add(desc).add(hidden);
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(args).options(all).positional(pos).run(), vm);
-    po::notify(vm);
-  } catch (const std::exception& e) {
-    std::cerr << "ubersim run: " << e.what() << "\n\n" << desc << "\n";
-    return kExitUsage;
-  }
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return kExitOk;
-  }
+  if (const auto done = ParseCommandLine(args, "run", desc, vm, &hidden, &pos)) return *done;
   if (duration < 0 || speed < 0 || !(crash_snapshot_interval >= 0)) {
     std::cerr << "ubersim run: --duration, --speed and --crash-snapshot-interval must be >= 0\n";
     return kExitUsage;
@@ -349,20 +364,8 @@ int ValidateCommand(const std::vector<std::string>& args) {
   hidden.add_options()("file", po::value<std::vector<std::string>>(&files));
   po::positional_options_description pos;
   pos.add("file", -1);
-  po::options_description all;
-  all.add(desc).add(hidden);
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(args).options(all).positional(pos).run(), vm);
-    po::notify(vm);
-  } catch (const std::exception& e) {
-    std::cerr << "ubersim validate: " << e.what() << "\n\n" << desc << "\n";
-    return kExitUsage;
-  }
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return kExitOk;
-  }
+  if (const auto done = ParseCommandLine(args, "validate", desc, vm, &hidden, &pos)) return *done;
   if (files.empty()) {
     std::cerr << "ubersim validate: name at least one file\n\n" << desc << "\n";
     return kExitUsage;
@@ -403,17 +406,7 @@ int PluginsCommand(const std::vector<std::string>& args) {
   desc.add_options()("help,h", "this help")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR (repeatable)");
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(args).options(desc).run(), vm);
-    po::notify(vm);
-  } catch (const std::exception& e) {
-    std::cerr << "ubersim plugins: " << e.what() << "\n\n" << desc << "\n";
-    return kExitUsage;
-  }
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return kExitOk;
-  }
+  if (const auto done = ParseCommandLine(args, "plugins", desc, vm)) return *done;
   PluginRegistry registry(PluginRegistry::DefaultSearchPaths(ToPaths(plugin_paths)));
   const auto result = registry.Scan();
   std::cout << "search path:\n";
@@ -445,17 +438,7 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
   physics_flags.AddTo(desc);  // other settings need --out: the default folder is the shipped report
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(args).options(desc).run(), vm);
-    po::notify(vm);
-  } catch (const std::exception& e) {
-    std::cerr << "ubersim validate-physics: " << e.what() << "\n\n" << desc << "\n";
-    return kExitUsage;
-  }
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return kExitOk;
-  }
+  if (const auto done = ParseCommandLine(args, "validate-physics", desc, vm)) return *done;
   PhysicsOverrides physics;
   if (!physics_flags.Read(vm, "validate-physics", physics)) return kExitUsage;
   if (physics.Any() && vm["out"].defaulted()) {
@@ -547,20 +530,8 @@ int BenchCommand(const std::vector<std::string>& args) {
   hidden.add_options()("world", po::value<std::vector<std::string>>(&worlds));
   po::positional_options_description pos;
   pos.add("world", -1);
-  po::options_description all;
-  all.add(desc).add(hidden);
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(args).options(all).positional(pos).run(), vm);
-    po::notify(vm);
-  } catch (const std::exception& e) {
-    std::cerr << "ubersim bench: " << e.what() << "\n\n" << desc << "\n";
-    return kExitUsage;
-  }
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return kExitOk;
-  }
+  if (const auto done = ParseCommandLine(args, "bench", desc, vm, &hidden, &pos)) return *done;
   if (!(duration > 0)) {
     std::cerr << "ubersim bench: --duration must be > 0\n";
     return kExitUsage;
@@ -670,20 +641,8 @@ int BatchCommand(const std::vector<std::string>& args) {
   hidden.add_options()("world", po::value<std::vector<std::string>>(&worlds));
   po::positional_options_description pos;
   pos.add("world", -1);
-  po::options_description all;
-  all.add(desc).add(hidden);
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(args).options(all).positional(pos).run(), vm);
-    po::notify(vm);
-  } catch (const std::exception& e) {
-    std::cerr << "ubersim batch: " << e.what() << "\n\n" << desc << "\n";
-    return kExitUsage;
-  }
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return kExitOk;
-  }
+  if (const auto done = ParseCommandLine(args, "batch", desc, vm, &hidden, &pos)) return *done;
   if (count < 1 || workers < 1 || !(duration > 0)) {
     std::cerr << "ubersim batch: --count >= 1, --workers >= 1, --duration > 0\n";
     return kExitUsage;
@@ -805,20 +764,8 @@ int SoakCommand(const std::vector<std::string>& args) {
   hidden.add_options()("world", po::value<std::string>(&world_arg));
   po::positional_options_description pos;
   pos.add("world", 1);
-  po::options_description all;
-  all.add(desc).add(hidden);
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(args).options(all).positional(pos).run(), vm);
-    po::notify(vm);
-  } catch (const std::exception& e) {
-    std::cerr << "ubersim soak: " << e.what() << "\n\n" << desc << "\n";
-    return kExitUsage;
-  }
-  if (vm.count("help")) {
-    std::cout << desc << "\n";
-    return kExitOk;
-  }
+  if (const auto done = ParseCommandLine(args, "soak", desc, vm, &hidden, &pos)) return *done;
   if (!(duration > 0) || !(interval > 0) || !(wall_overlap >= 0 && wall_overlap <= 1)) {
     std::cerr << "ubersim soak: --duration and --teleport-interval must be > 0, --wall-overlap 0..1\n";
     return kExitUsage;
