@@ -1,35 +1,20 @@
 // SPDX-License-Identifier: Apache-2.0
 // The `ubersim` command as a user runs it: a separate process, its output and exit code.
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "../common/run_ubersim.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
-
-Result RunUbersim(const std::string& args, const std::string& env = "") {
-  const std::string cmd = env + " " UBERSIM_BINARY_DIR "/bin/ubersim " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using Result = ubersim::testing::CliResult;
+using ubersim::testing::RunUbersim;
 
 fs::path TempDir() {
   const fs::path dir = fs::temp_directory_path() /

@@ -4,11 +4,8 @@
 // --restore resumes; "disable" carries on; --snapshot-out and --restore continue a run bit for
 // bit; a snapshot of another world is refused; a crash (SIGSEGV) leaves a report and the last
 // periodic snapshot.
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -16,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../common/run_ubersim.hpp"
 #include "ubersim/kernel/snapshot.hpp"
 
 namespace ubersim::kernel {
@@ -23,26 +21,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code = -1;   // -1: killed by a signal
-  int signal = 0;       // the signal that killed it
-  std::string output;   // stdout and stderr together
-};
-
-Result RunUbersim(const std::string& args) {
-  const std::string cmd = UBERSIM_BINARY_DIR "/bin/ubersim " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
-  const int status = pclose(pipe);
-  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
-  // popen runs a shell, which reports a child killed by signal s as exit status 128 + s.
-  if (WIFEXITED(status) && r.exit_code > 128) r.signal = r.exit_code - 128;
-  if (WIFSIGNALED(status)) r.signal = WTERMSIG(status);
-  return r;
-}
+using Result = ubersim::testing::CliResult;
+using ubersim::testing::RunUbersim;
 
 const std::string kModels = UBERSIM_SOURCE_DIR "/models";
 
