@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // The `ubersim` command as a user runs it: a separate process, its output and exit code.
 
+#include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -199,6 +201,33 @@ TEST(Cli, PluginsListsTheSearchPath) {
   EXPECT_NE(r.output.find(fs::canonical(dir).string()), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("PLUGIN"), std::string::npos) << r.output;
   fs::remove_all(dir);
+}
+
+TEST(Cli, SoakLogsEveryTeleportOnlyWhenAsked) {
+  // The verdict is not the point here (the sanitizer build's memory grows): what is printed is.
+  const Result logged = RunUbersim("soak ssl-2003 --duration 2 --seed 1 --quiet --log-teleports");
+  // The first teleport comes from the teleports' own random stream, before the physics matters.
+  EXPECT_NE(logged.output.find("t = 0.125 s: teleport (robot into wall): robot blue 0 to (1.324, -0.480, 0.000) m"),
+            std::string::npos)
+      << logged.output;
+  // As many teleport lines (put-backs aside) as the summary counts teleports.
+  std::size_t lines = 0;
+  for (std::size_t at = logged.output.find("teleport ("); at != std::string::npos;
+       at = logged.output.find("teleport (", at + 1)) {
+    if (logged.output.compare(at, 20, "teleport (put back):") != 0) ++lines;
+  }
+  const std::size_t summary = logged.output.find("\nteleports:");
+  ASSERT_NE(summary, std::string::npos) << logged.output;
+  std::istringstream counts(logged.output.substr(summary + 12, logged.output.find('\n', summary + 1) - summary - 12));
+  std::size_t counted = 0;
+  for (std::string word; counts >> word;) {
+    if (std::isdigit(static_cast<unsigned char>(word[0]))) counted += std::stoul(word);
+  }
+  EXPECT_GT(counted, 0u) << logged.output;
+  EXPECT_EQ(lines, counted) << logged.output;
+  const Result quiet = RunUbersim("soak ssl-2003 --duration 2 --seed 1 --quiet");
+  EXPECT_NE(quiet.output.find("\nteleports:"), std::string::npos) << quiet.output;
+  EXPECT_EQ(quiet.output.find("teleport ("), std::string::npos) << quiet.output;
 }
 
 }  // namespace
