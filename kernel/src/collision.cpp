@@ -418,6 +418,22 @@ int CollisionManager::FindContacts(GeomImpl& a, GeomImpl& b) {
     }
     if (n >= 0) return n;  // else not both upright: the general test
   }
+  const bool a_box = a.GetShape().kind == Shape::Kind::kBox, b_box = b.GetShape().kind == Shape::Kind::kBox;
+  if ((a.prism() && b_box) || (a_box && b.prism())) {
+    GeomImpl& shell = a.prism() ? a : b;
+    GeomImpl& box = a.prism() ? b : a;
+    const int n = CollideUprightPrismWithBox(*shell.prism(), shell.GetPose(), box.GetShape().size, box.GetPose(),
+                                             max_contacts_, scratch_.data());
+    for (int i = 0; i < n; ++i) {
+      dContactGeom& c = scratch_[static_cast<std::size_t>(i)];
+      c.g1 = a.id();
+      c.g2 = b.id();
+      if (&shell == &b) {  // the normal must point out of b into a
+        for (int k = 0; k < 3; ++k) c.normal[k] = -c.normal[k];
+      }
+    }
+    if (n >= 0) return n;
+  }
   return SpreadContacts(scratch_, dCollide(a.id(), b.id(), kContactCandidates, scratch_.data(), sizeof(dContactGeom)),
                         max_contacts_);
 }

@@ -156,6 +156,148 @@ void Write(const Touch& t, const V2& spot, double z, dContactGeom& c) {
   c.g1 = c.g2 = nullptr;
 }
 
+// A box standing upright, seen from above: a rectangle.
+struct Rect {
+  V2 centre;
+  std::array<V2, 2> axis;  // its edges' directions (unit, perpendicular)
+  std::array<double, 2> half;
+
+  V2 Corner(int k) const {
+    return centre + axis[0] * ((k & 1) ? -half[0] : half[0]) + axis[1] * ((k & 2) ? -half[1] : half[1]);
+  }
+  V2 Support(const V2& u) const {
+    return centre + axis[0] * (u.dot(axis[0]) >= 0.0 ? half[0] : -half[0]) +
+           axis[1] * (u.dot(axis[1]) >= 0.0 ? half[1] : -half[1]);
+  }
+};
+
+double Overlap(const Outline& a, const Rect& b, const V2& n) { return n.dot(a.Support(n)) - n.dot(b.Support(-n)); }
+
+// Where a shape lies deepest along unit u, across u (coordinate along `side`): one point, or
+// the stretch [lo, hi] of a flat edge square to u.
+struct Reach {
+  double lo, hi;
+};
+
+Reach DeepestAcross(const Outline& o, const V2& u, const V2& side, double parallel) {
+  if (o.has_face() && u.dot(o.forward) > parallel) {
+    const double c0 = side.dot(o.Corner(0)), c1 = side.dot(o.Corner(1));
+    return {std::min(c0, c1), std::max(c0, c1)};
+  }
+  const double s = side.dot(o.Support(u));
+  return {s, s};
+}
+
+Reach DeepestAcross(const Rect& r, const V2& u, const V2& side, double parallel) {
+  for (std::size_t i = 0; i < 2; ++i) {
+    if (std::abs(u.dot(r.axis[i])) > parallel) {
+      const V2 mid = r.centre + r.axis[i] * (u.dot(r.axis[i]) > 0.0 ? r.half[i] : -r.half[i]);
+      const V2& along = r.axis[1 - i];
+      const double c0 = side.dot(mid + along * r.half[1 - i]), c1 = side.dot(mid - along * r.half[1 - i]);
+      return {std::min(c0, c1), std::max(c0, c1)};
+    }
+  }
+  const double s = side.dot(r.Support(u));
+  return {s, s};
+}
+
+// A shell's cross-section against a box's: the same separating-axis search as two shells'. The
+// overlap is piecewise the arc's or a corner's sinusoid against a box corner; its least value
+// lies where the rectangle's supporting corner changes (its edges' normals), where the outline's
+// does (its face normal, its corners' radial directions), or where a piece is stationary (the
+// outline's centre or a corner toward a box corner).
+bool TouchAt(const Outline& a, const Rect& b, Touch& t) {
+  std::array<V2, 24> candidates;
+  std::size_t count = 0;
+  auto add = [&](const V2& v) {
+    const double length = v.norm();
+    if (length > 1e-12) candidates[count++] = v / length;
+  };
+  for (std::size_t i = 0; i < 2; ++i) {
+    add(b.axis[i]);
+    add(-b.axis[i]);
+  }
+  add(b.centre - a.centre);
+  for (int k = 0; k < 4; ++k) add(b.Corner(k) - a.centre);
+  if (a.has_face()) {
+    add(a.forward);
+    for (int i = 0; i < 2; ++i) {
+      add(a.Corner(i) - a.centre);
+      for (int k = 0; k < 4; ++k) add(b.Corner(k) - a.Corner(i));
+    }
+  }
+  t.depth = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < count; ++i) {
+    const double d = Overlap(a, b, candidates[i]);
+    if (d < t.depth) {
+      t.depth = d;
+      t.n = candidates[i];
+    }
+  }
+  if (t.depth <= 0.0) return false;
+  // They touch midway between the deepest points along n; where both are flat there, along the
+  // stretch both edges share (both its ends), else across from the one deepest point.
+  const V2& n = t.n;
+  const V2 side(-n.y(), n.x());
+  const double kParallel = std::cos(0.01);
+  const double across = 0.5 * (n.dot(a.Support(n)) + n.dot(b.Support(-n)));
+  const Reach ra = DeepestAcross(a, n, side, kParallel), rb = DeepestAcross(b, -n, side, kParallel);
+  const bool a_flat = ra.hi > ra.lo, b_flat = rb.hi > rb.lo;
+  if (a_flat && b_flat) {
+    const double lo = std::max(ra.lo, rb.lo), hi = std::min(ra.hi, rb.hi);
+    if (hi - lo > 1e-6) {
+      t.spots = {n * across + side * lo, n * across + side * hi};
+      t.spot_count = 2;
+      return true;
+    }
+    t.spots = {n * across + side * (0.5 * (lo + hi)), V2::Zero()};
+  } else if (a_flat) {
+    t.spots = {n * across + side * rb.lo, V2::Zero()};
+  } else if (b_flat) {
+    t.spots = {n * across + side * ra.lo, V2::Zero()};
+  } else {
+    t.spots = {n * across + side * (0.5 * (ra.lo + rb.lo)), V2::Zero()};
+  }
+  t.spot_count = 1;
+  return true;
+}
+
+// The touches at the bottom and the top of the height two shapes share.
+struct Levels {
+  std::array<Touch, 2> touches;
+  std::array<double, 2> heights;
+};
+
+// Writes a level's contacts: every spot when max_contacts allows, else the deeper level's (its
+// middle, at the middle of the shared height when both levels touch alike, for one).
+int WriteLevels(const Levels& levels, int max_contacts, dContactGeom* out) {
+  const auto& touches = levels.touches;
+  const auto& heights = levels.heights;
+  if (touches[0].spot_count == 0 && touches[1].spot_count == 0) return 0;
+  const int wanted = touches[0].spot_count + touches[1].spot_count;
+  if (wanted <= max_contacts) {
+    int written = 0;
+    for (std::size_t h = 0; h < 2; ++h) {
+      for (int s = 0; s < touches[h].spot_count; ++s) {
+        Write(touches[h], touches[h].spots[static_cast<std::size_t>(s)], heights[h], out[written++]);
+      }
+    }
+    return written;
+  }
+  const std::size_t deeper =
+      touches[1].spot_count > 0 && (touches[0].spot_count == 0 || touches[1].depth > touches[0].depth) ? 1 : 0;
+  const Touch& t = touches[deeper];
+  const bool alike = touches[0].spot_count > 0 && touches[1].spot_count > 0 &&
+                     std::abs(touches[0].depth - touches[1].depth) < 1e-6;
+  const double z = alike ? 0.5 * (heights[0] + heights[1]) : heights[deeper];
+  if (t.spot_count <= max_contacts) {
+    for (int s = 0; s < t.spot_count; ++s) Write(t, t.spots[static_cast<std::size_t>(s)], z, out[s]);
+    return t.spot_count;
+  }
+  Write(t, 0.5 * (t.spots[0] + t.spots[1]), z, out[0]);
+  return 1;
+}
+
 }  // namespace
 
 // A closed triangle mesh, not a convex prism: ODE's convex-plane test returns the first
@@ -199,39 +341,48 @@ int CollideUprightPrisms(const FlatFrontPrism& pa_shape, const Pose& pa, const F
   if (z_high < z_low || max_contacts < 1) return 0;
   // The cross-sections at the bottom and the top of the shared height (they differ when a shell
   // leans): each touching one gives its contacts there.
-  std::array<Touch, 2> touches;
-  std::array<double, 2> heights{z_low, z_high};
-  int touching = 0;
-  for (int h = 0; h < 2; ++h) {
-    if (TouchAt(a.At(heights[static_cast<std::size_t>(h)]), b.At(heights[static_cast<std::size_t>(h)]),
-                touches[static_cast<std::size_t>(h)])) {
-      ++touching;
+  Levels levels;
+  levels.heights = {z_low, z_high};
+  for (std::size_t h = 0; h < 2; ++h) {
+    if (!TouchAt(a.At(levels.heights[h]), b.At(levels.heights[h]), levels.touches[h])) levels.touches[h].spot_count = 0;
+  }
+  return WriteLevels(levels, max_contacts, out);
+}
+
+int CollideUprightPrismWithBox(const FlatFrontPrism& prism_shape, const Pose& prism_pose, const Vec3& box_size,
+                               const Pose& box_pose, int max_contacts, dContactGeom* out) {
+  Standing a;
+  if (!MakeStanding(prism_shape, prism_pose, a)) return -1;
+  const Vec3 box_z = box_pose.orientation * Vec3::UnitZ();
+  if (std::abs(box_z.z()) < 1.0 - 1e-9) return -1;  // a tilted box: not a rectangle at each height
+  Rect b;
+  b.centre = V2(box_pose.position.x(), box_pose.position.y());
+  const Vec3 box_x = box_pose.orientation * Vec3::UnitX();
+  b.axis[0] = V2(box_x.x(), box_x.y()).normalized();
+  b.axis[1] = V2(-b.axis[0].y(), b.axis[0].x());
+  b.half = {0.5 * box_size.x(), 0.5 * box_size.y()};
+  const double z_low = std::max(a.z_low, box_pose.position.z() - 0.5 * box_size.z());
+  const double z_high = std::min(a.z_high, box_pose.position.z() + 0.5 * box_size.z());
+  if (z_high < z_low || max_contacts < 1) return 0;
+  Levels levels;
+  levels.heights = {z_low, z_high};
+  double deepest = 0.0;
+  for (std::size_t h = 0; h < 2; ++h) {
+    Touch& t = levels.touches[h];
+    if (TouchAt(a.At(levels.heights[h]), b, t)) {
+      deepest = std::max(deepest, t.depth);
     } else {
-      touches[static_cast<std::size_t>(h)].spot_count = 0;
+      t.spot_count = 0;
     }
   }
-  if (touching == 0) return 0;
-  int wanted = touches[0].spot_count + touches[1].spot_count;
-  if (wanted <= max_contacts) {
-    int written = 0;
-    for (std::size_t h = 0; h < 2; ++h) {
-      for (int s = 0; s < touches[h].spot_count; ++s) Write(touches[h], touches[h].spots[static_cast<std::size_t>(s)], heights[h], out[written++]);
-    }
-    return written;
-  }
-  // Fewer allowed: the deeper level's spots, or, for one contact, the middle of the deeper
-  // level at the middle of the shared height when both levels touch alike.
-  const std::size_t deeper = touches[1].spot_count > 0 && (touches[0].spot_count == 0 || touches[1].depth > touches[0].depth) ? 1 : 0;
-  const Touch& t = touches[deeper];
-  const bool alike = touches[0].spot_count > 0 && touches[1].spot_count > 0 &&
-                     std::abs(touches[0].depth - touches[1].depth) < 1e-6;
-  const double z = alike ? 0.5 * (z_low + z_high) : heights[deeper];
-  if (t.spot_count <= max_contacts) {
-    for (int s = 0; s < t.spot_count; ++s) Write(t, t.spots[static_cast<std::size_t>(s)], z, out[s]);
-    return t.spot_count;
-  }
-  Write(t, 0.5 * (t.spots[0] + t.spots[1]), z, out[0]);
-  return 1;
+  // A shell standing mostly above (or below) the box and overlapping it less in height than
+  // across: it is landing on the box's top, the way out is vertical, and the general test finds
+  // it. A shell beside a box (its middle within the box's height) is pushed out sideways, however
+  // deep: robots do not climb walls.
+  const double box_low = box_pose.position.z() - 0.5 * box_size.z(), box_high = box_low + box_size.z();
+  const bool beside = a.origin_z >= box_low && a.origin_z <= box_high;
+  if (!beside && deepest > 0.0 && z_high - z_low < deepest) return -1;
+  return WriteLevels(levels, max_contacts, out);
 }
 
 }  // namespace ubersim::kernel

@@ -163,5 +163,98 @@ TEST(UprightPrism, ShellsAtDifferentHeightsDoNotTouch) {
   EXPECT_EQ(CollideUprightPrisms(kShell, Upright(0, 0, 0), kShell, Pose::FromYaw(Vec3(0.1, 0, 0.3), 0), 4, c), 0);
 }
 
+// A box's outline seen from above, at its pose.
+std::vector<Eigen::Vector2d> BoxOutline(const Vec3& size, const Pose& pose) {
+  std::vector<Eigen::Vector2d> out;
+  for (int k = 0; k < 4; ++k) {
+    const Vec3 w = pose.Transform(Vec3((k & 1 ? -0.5 : 0.5) * size.x(), (k & 2 ? -0.5 : 0.5) * size.y(), 0.0));
+    out.emplace_back(w.x(), w.y());
+  }
+  return out;
+}
+
+TEST(UprightPrismWithBox, DepthAndNormalMatchABruteForceSearch) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> near(-0.25, 0.25), turn(-M_PI, M_PI), thickness(0.01, 0.3);
+  int touching = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const FlatFrontPrism& shell = trial % 4 == 3 ? kRound : kShell;
+    const Pose ps = Upright(near(rng), near(rng), turn(rng));
+    const Vec3 size(thickness(rng), thickness(rng) + 0.2, 0.16);
+    const Pose pb = Pose::FromYaw(Vec3(0, 0, 0.08), turn(rng));
+    dContactGeom c[4];
+    const int n = CollideUprightPrismWithBox(shell, ps, size, pb, 4, c);
+    ASSERT_GE(n, 0) << "trial " << trial;
+    Eigen::Vector2d normal;  // from the shell to the box
+    const double depth = BruteForceDepth(Outline(shell, ps), BoxOutline(size, pb), normal);
+    if (depth > 0.5e-3) {
+      ASSERT_GT(n, 0) << "trial " << trial << ": brute force finds " << depth << " m";
+      for (int i = 0; i < n; ++i) {
+        EXPECT_NEAR(c[i].depth, depth, 0.7e-3) << "trial " << trial;
+        // Out of the box into the shell: against the brute force's shell-to-box direction.
+        EXPECT_GT(-(c[i].normal[0] * normal.x() + c[i].normal[1] * normal.y()), std::cos(0.1)) << "trial " << trial;
+        EXPECT_EQ(c[i].normal[2], 0.0);
+        // Where they touch lies within reach of both: inside the box grown by the depth and
+        // inside the shell's disc grown by it.
+        const Vec3 local = pb.orientation.conjugate() * (Vec3(c[i].pos[0], c[i].pos[1], 0.08) - pb.position);
+        EXPECT_LT(std::abs(local.x()), 0.5 * size.x() + depth + 1e-9) << "trial " << trial;
+        EXPECT_LT(std::abs(local.y()), 0.5 * size.y() + depth + 1e-9) << "trial " << trial;
+        EXPECT_LT(std::hypot(c[i].pos[0] - ps.position.x(), c[i].pos[1] - ps.position.y()), shell.radius + 1e-9);
+      }
+      ++touching;
+    } else if (depth < -0.5e-3) {
+      EXPECT_EQ(n, 0) << "trial " << trial << ": apart by " << -depth << " m";
+    }
+  }
+  EXPECT_GT(touching, 100);
+}
+
+TEST(UprightPrismWithBox, AShellPushedIntoAThinWallFromBehindIsPushedBackOut) {
+  // The soak's finding: a robot put 4 mm into a goal's 2 cm back wall from behind. ODE's mesh
+  // test took the hollow shell's far side and pushed it through and over; the way out is back.
+  const Vec3 wall(0.02, 1.2, 0.16);
+  const Pose wall_pose = Pose::FromYaw(Vec3(6.19, 0, 0.08), 0);
+  const double behind = 6.2 + 0.09 - 0.004;
+  for (double yaw : {0.0, 0.5 * M_PI, 2.0}) {  // the arc toward the wall
+    dContactGeom c[4];
+    const int n = CollideUprightPrismWithBox(kShell, Upright(behind, -0.319, yaw), wall, wall_pose, 4, c);
+    ASSERT_EQ(n, 2) << "yaw " << yaw;  // one spot, at the bottom and the top
+    for (int i = 0; i < n; ++i) {
+      EXPECT_NEAR(c[i].normal[0], 1.0, 1e-12) << "yaw " << yaw;
+      EXPECT_NEAR(c[i].depth, 0.004, 1e-12) << "yaw " << yaw;
+      EXPECT_NEAR(c[i].pos[0], 6.2 - 0.002, 1e-9);
+      EXPECT_NEAR(c[i].pos[1], -0.319, 1e-9);
+    }
+  }
+  // The flat face toward the wall reaches 2 cm less far: apart.
+  dContactGeom c[4];
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, Upright(behind, -0.319, M_PI), wall, wall_pose, 4, c), 0);
+  // Its face pressed flat against the wall: the ends of the face at the bottom and the top.
+  ASSERT_EQ(CollideUprightPrismWithBox(kShell, Upright(6.2 + 0.07 - 0.001, 0, M_PI), wall, wall_pose, 4, c), 4);
+  EXPECT_NEAR(std::abs(c[0].pos[1]), std::sqrt(0.09 * 0.09 - 0.07 * 0.07), 1e-9);
+  EXPECT_NEAR(c[0].depth, 0.001, 1e-12);
+  // One contact allowed: the face's middle, half way up.
+  ASSERT_EQ(CollideUprightPrismWithBox(kShell, Upright(6.2 + 0.07 - 0.001, 0, M_PI), wall, wall_pose, 1, c), 1);
+  EXPECT_NEAR(c[0].pos[1], 0.0, 1e-9);
+  EXPECT_NEAR(c[0].pos[2], 0.08, 1e-9);
+}
+
+TEST(UprightPrismWithBox, TiltedBoxesLeaningShellsAndWallTopsAreLeftToTheGeneralTest) {
+  dContactGeom c[4];
+  const Vec3 wall(0.02, 1.0, 0.1);
+  Pose tilted = Pose::FromYaw(Vec3(0.1, 0, 0.05), 0);
+  tilted.orientation = Quat(Eigen::AngleAxisd(0.2, Vec3::UnitX()));
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, Upright(0, 0, 0), wall, tilted, 4, c), -1);
+  Pose leaning = Upright(0, 0, 0);
+  leaning.orientation = Quat(Eigen::AngleAxisd(2.0 * kUprightTilt, Vec3::UnitY()));
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, leaning, wall, Pose::FromYaw(Vec3(0.1, 0, 0.05), 0), 4, c), -1);
+  // A shell whose bottom is 5 mm into a 10 cm wall's top, its centre over the wall.
+  const Pose on_top = Pose::FromYaw(Vec3(0.0, 0.0, 0.1 + kShell.half_height - 0.005), 0);
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, on_top, wall, Pose::FromYaw(Vec3(0, 0, 0.05), 0), 4, c), -1);
+  // Above the wall: apart.
+  const Pose above = Pose::FromYaw(Vec3(0.0, 0.0, 0.1 + kShell.half_height + 0.005), 0);
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, above, wall, Pose::FromYaw(Vec3(0, 0, 0.05), 0), 4, c), 0);
+}
+
 }  // namespace
 }  // namespace ubersim::kernel

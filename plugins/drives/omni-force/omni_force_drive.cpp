@@ -144,6 +144,7 @@ class OmniForceDrive final : public ubersim::Drive {
     }
     geometry_ = m / wheel_radius_;
     inverse_ = geometry_.completeOrthogonalDecomposition().pseudoInverse();
+    wheel_targets_.setZero(static_cast<Eigen::Index>(wheels_.size()));
     // The wheels' yaw servo gain per step: their shares m/n at wheel_distance d over the
     // chassis' moment of inertia, a solid cylinder's m·R²/2, is 2·d²/R². At 2 or more each step
     // would overshoot by the whole error or more and the robot would spin up; wheels far out (d
@@ -170,13 +171,13 @@ class OmniForceDrive final : public ubersim::Drive {
     const ubersim::Body& chassis = ctx_->Chassis();
     const ubersim::Pose pose = chassis.GetPose();
     const Eigen::Matrix3d rotation = pose.orientation.toRotationMatrix();
-    Eigen::VectorXd speeds(static_cast<Eigen::Index>(wheels_.size()));
-    for (std::size_t i = 0; i < wheels_.size(); ++i) {
-      const Frame fr = WheelFrame(pose.position, rotation, wheels_[i]);
+    f.wheel_speeds.reserve(wheels_.size());
+    for (const Wheel& w : wheels_) {
+      const Frame fr = WheelFrame(pose.position, rotation, w);
       f.wheel_speeds.push_back(chassis.PointVelocity(fr.contact).dot(fr.rolling) / wheel_radius_);
-      speeds(static_cast<Eigen::Index>(i)) = f.wheel_speeds.back();
     }
-    const Eigen::Vector3d v = inverse_ * speeds;  // forward, left, angular
+    const Eigen::Vector3d v = inverse_ * Eigen::Map<const Eigen::VectorXd>(  // forward, left, angular
+                                             f.wheel_speeds.data(), static_cast<Eigen::Index>(f.wheel_speeds.size()));
     f.local_velocity.linear = Vec3(v.x(), v.y(), 0.0);
     f.local_velocity.angular = Vec3(0.0, 0.0, v.z());
     return f;
@@ -212,19 +213,19 @@ class OmniForceDrive final : public ubersim::Drive {
   }
 
   void PreStep(const ubersim::StepInfo& step) override {
-    Eigen::VectorXd targets;  // wheel speeds, rad/s
+    Eigen::VectorXd& targets = wheel_targets_;  // wheel speeds, rad/s
     const bool fresh = watchdog_.Fresh(ctx_->SimTime());
     const auto* direct = fresh ? std::get_if<ubersim::WheelSpeedCommand>(&command_) : nullptr;
     if (direct) {
       // Direct wheel speeds bypass the velocity loop, as on the real robots.
-      const Eigen::VectorXd speeds = Eigen::Map<const Eigen::VectorXd>(
-          direct->wheel_speeds.data(), static_cast<Eigen::Index>(direct->wheel_speeds.size()));
+      const Eigen::Map<const Eigen::VectorXd> speeds(direct->wheel_speeds.data(),
+                                                     static_cast<Eigen::Index>(direct->wheel_speeds.size()));
       targets = speeds.cwiseMax(-max_wheel_speed_).cwiseMin(max_wheel_speed_);
       const Eigen::Vector3d v = inverse_ * speeds;
       servo_.Set({Eigen::Vector2d(v.x(), v.y()), v.z()});
     } else {
       const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
-      targets = geometry_ * Eigen::Vector3d(set.linear.x(), set.linear.y(), set.angular);
+      targets.noalias() = geometry_ * Eigen::Vector3d(set.linear.x(), set.linear.y(), set.angular);
       // Keep the direction when a wheel would exceed its speed: scale all wheels together.
       const double peak = targets.cwiseAbs().maxCoeff();
       if (peak > max_wheel_speed_) targets *= max_wheel_speed_ / peak;
@@ -307,6 +308,7 @@ class OmniForceDrive final : public ubersim::Drive {
   std::vector<Wheel> wheels_;  // sized once in Configure: the contact handlers hold indices
   Eigen::MatrixXd geometry_;   // wheel speeds (rad/s) = geometry_ · (forward, left, angular)
   Eigen::MatrixXd inverse_;    // (forward, left, angular) = inverse_ · wheel speeds
+  Eigen::VectorXd wheel_targets_;  // this step's wheel speeds, rad/s (sized once: no allocation per step)
   double wheel_radius_ = 0.029;
   double distance_ = 0.08;
   double max_torque_ = 0.5;

@@ -92,6 +92,7 @@ class OmniDrive final : public ubersim::Drive {
     }
     geometry_ = m / wheel_radius_;
     inverse_ = geometry_.completeOrthogonalDecomposition().pseudoInverse();
+    wheel_targets_.setZero(static_cast<Eigen::Index>(wheels_.size()));
   }
 
   void SetCommand(const ubersim::MoveCommand& command) override {
@@ -107,12 +108,10 @@ class OmniDrive final : public ubersim::Drive {
 
   ubersim::DriveFeedback Feedback() const override {
     ubersim::DriveFeedback f;
-    Eigen::VectorXd speeds(static_cast<Eigen::Index>(wheels_.size()));
-    for (std::size_t i = 0; i < wheels_.size(); ++i) {
-      f.wheel_speeds.push_back(wheels_[i].hinge->Rate());
-      speeds(static_cast<Eigen::Index>(i)) = f.wheel_speeds.back();
-    }
-    const Eigen::Vector3d v = inverse_ * speeds;  // forward, left, angular
+    f.wheel_speeds.reserve(wheels_.size());
+    for (const Wheel& w : wheels_) f.wheel_speeds.push_back(w.hinge->Rate());
+    const Eigen::Vector3d v = inverse_ * Eigen::Map<const Eigen::VectorXd>(  // forward, left, angular
+                                             f.wheel_speeds.data(), static_cast<Eigen::Index>(f.wheel_speeds.size()));  // forward, left, angular
     f.local_velocity.linear = Vec3(v.x(), v.y(), 0.0);
     f.local_velocity.angular = Vec3(0.0, 0.0, v.z());
     return f;
@@ -145,9 +144,8 @@ class OmniDrive final : public ubersim::Drive {
           wheels_[i].hinge->SetMotor(std::clamp(w->wheel_speeds[i], -max_wheel_speed_, max_wheel_speed_),
                                      max_torque_);
         }
-        const Eigen::VectorXd speeds = Eigen::Map<const Eigen::VectorXd>(
-            w->wheel_speeds.data(), static_cast<Eigen::Index>(w->wheel_speeds.size()));
-        const Eigen::Vector3d v = inverse_ * speeds;
+        const Eigen::Vector3d v = inverse_ * Eigen::Map<const Eigen::VectorXd>(
+                                                 w->wheel_speeds.data(), static_cast<Eigen::Index>(w->wheel_speeds.size()));
         servo_.Set({Eigen::Vector2d(v.x(), v.y()), v.z()});
         return;
       }
@@ -156,12 +154,12 @@ class OmniDrive final : public ubersim::Drive {
     const Eigen::Vector2d lin = set.linear;
     const double spin = set.angular;
 
-    const Eigen::VectorXd wheel_targets = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
+    wheel_targets_.noalias() = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
     // Keep the direction when a wheel would exceed its speed: scale all wheels together.
-    const double peak = wheel_targets.cwiseAbs().maxCoeff();
+    const double peak = wheel_targets_.cwiseAbs().maxCoeff();
     const double scale = peak > max_wheel_speed_ ? max_wheel_speed_ / peak : 1.0;
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
-      wheels_[i].hinge->SetMotor(scale * wheel_targets(static_cast<Eigen::Index>(i)), max_torque_);
+      wheels_[i].hinge->SetMotor(scale * wheel_targets_(static_cast<Eigen::Index>(i)), max_torque_);
     }
   }
 
@@ -183,6 +181,7 @@ class OmniDrive final : public ubersim::Drive {
   std::vector<Wheel> wheels_;
   Eigen::MatrixXd geometry_;   // wheel speeds (rad/s) = geometry_ · (forward, left, angular)
   Eigen::MatrixXd inverse_;    // (forward, left, angular) = inverse_ · wheel speeds
+  Eigen::VectorXd wheel_targets_;  // this step's wheel speeds, rad/s (sized once: no allocation per step)
   double wheel_radius_ = 0.029;
   double distance_ = 0.08;
   double max_torque_ = 0.5;

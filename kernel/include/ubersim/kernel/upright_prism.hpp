@@ -35,4 +35,14 @@ inline constexpr double kUprightTilt = 0.1;
 int CollideUprightPrisms(const FlatFrontPrism& a, const Pose& pa, const FlatFrontPrism& b, const Pose& pb,
                          int max_contacts, dContactGeom* out);
 
+/// Contacts between an upright shell and a box standing upright (turned about z only: a field
+/// wall, a goal's wall), found the same way: horizontal normal out of the box into the shell,
+/// the least depth across. ODE's mesh-against-box test gives arbitrary normals for a shell
+/// pushed into a thin wall (it is a hollow surface), which can throw a robot over the wall.
+/// Returns -1 when the shell leans, the box is tilted, or the shell stands above (or below) the
+/// box, overlapping it less in height than across (landing on a wall's top: the way out is
+/// vertical); else as CollideUprightPrisms.
+int CollideUprightPrismWithBox(const FlatFrontPrism& prism, const Pose& prism_pose, const Vec3& box_size,
+                               const Pose& box_pose, int max_contacts, dContactGeom* out);
+
 }  // namespace ubersim::kernel
