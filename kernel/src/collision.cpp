@@ -346,6 +346,9 @@ std::vector<std::pair<GeomImpl*, GeomImpl*>> CollisionManager::TouchingPairs() {
 void CollisionManager::Collide() {
   stats_ = CollisionStats{};
   ball_touching_.clear();
+  if (++passes_ % kSurfaceCacheSweepPasses == 0) {
+    std::erase_if(surfaces_, [this](const auto& entry) { return entry.second.last_pass + kSurfaceCacheSweepPasses < passes_; });
+  }
   auto narrow = [this](GeomImpl& a, GeomImpl& b) { Narrow(a, b); };
   ForEachPair(narrow);
   if (swept_ball_step_ > 0) SweepFastBalls();
@@ -460,6 +463,7 @@ const SurfaceMaterial& CollisionManager::PairSurface(const GeomImpl& a, const Ge
     c = CachedSurface{a.material_version(), b.material_version(), materials_.version(),
                       materials_.Resolve(a.Material(), b.Material())};
   }
+  c.last_pass = passes_;
   return c.surface;
 }
 

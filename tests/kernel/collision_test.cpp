@@ -309,6 +309,42 @@ TEST(CollisionManager, TheSurfaceCacheStaysBoundedAndRight) {
   EXPECT_GT(cm.cached_surfaces(), 0u);
 }
 
+// The soak's memory finding: over an hour ever new pairs touch, and a cache of every pair that
+// ever touched grew by about 1.8 kB a simulated second. Pairs that stopped touching are swept
+// out; pairs still touching stay.
+TEST(CollisionManager, TheSurfaceCacheForgetsPairsThatStoppedTouching) {
+  SmallScene s;
+  CollisionManager cm(s.graph, Broadphase::kSweepAndPrune, 4);
+  s.graph.Root().AddChild("field").AddGeom(GeomSpec{"carpet", Shape::Plane(Vec3::UnitZ(), 0), {}, {}, {}, true},
+                                           nullptr);
+  std::vector<Body*> bodies;
+  for (int i = 0; i < 10; ++i) {  // five touching pairs of spheres resting on the carpet
+    SceneNode& n = s.graph.Root().AddChild("thing" + std::to_string(i));
+    BodySpec b;
+    b.name = "b";
+    b.mass = MassSpec::Solid(Shape::Sphere(0.05), 0.1);
+    b.pose.position = Vec3(1.0 * (i / 2) + 0.09 * (i % 2), 0, 0.049);
+    bodies.push_back(&n.AddBody(b));
+    n.AddGeom(GeomSpec{"s", Shape::Sphere(0.05), {}, {}, {}, true}, bodies.back());
+  }
+  auto pass = [&] {
+    cm.Collide();
+    cm.ClearContacts();
+  };
+  pass();
+  EXPECT_EQ(cm.cached_surfaces(), 15u);  // five sphere pairs, ten spheres on the carpet
+  // Part every pair but the first: the parted pairs' surfaces go within two sweep intervals.
+  for (int i = 3; i < 10; i += 2) {
+    Pose p = bodies[static_cast<std::size_t>(i)]->GetPose();
+    p.position.y() = 0.5;
+    bodies[static_cast<std::size_t>(i)]->SetPose(p);
+  }
+  for (std::uint64_t k = 0; k < CollisionManager::kSurfaceCacheSweepPasses / 2; ++k) pass();
+  EXPECT_EQ(cm.cached_surfaces(), 15u) << "not yet stale";
+  for (std::uint64_t k = 0; k < 2 * CollisionManager::kSurfaceCacheSweepPasses; ++k) pass();
+  EXPECT_EQ(cm.cached_surfaces(), 11u) << "the first pair and the ten carpet contacts stay";
+}
+
 // A body whose box lies wholly above the carpet is never narrow-tested against it (a trimesh
 // chassis would test every vertex); one that reaches down to it is.
 std::size_t NarrowTestsWithBoxAt(double z) {

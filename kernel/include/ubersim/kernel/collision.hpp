@@ -114,6 +114,9 @@ class CollisionManager {
   const CollisionStats& stats() const { return stats_; }
   /// How many pairs' resolved surfaces are cached now (bounded, however long the run).
   std::size_t cached_surfaces() const { return surfaces_.size(); }
+  /// Every this many Collide() passes, the surfaces of pairs that have not touched for as many
+  /// passes are dropped: the cache holds what touches lately, so memory stays flat all day.
+  static constexpr std::uint64_t kSurfaceCacheSweepPasses = 1000;
 
   /// True when the exclusion rules let a and b collide at all.
   static bool MayCollide(const GeomImpl& a, const GeomImpl& b);
@@ -138,6 +141,7 @@ class CollisionManager {
   struct CachedSurface {
     std::uint64_t a_version, b_version, table_version;
     SurfaceMaterial surface;
+    std::uint64_t last_pass = 0;  // the Collide() pass that last used it
   };
   struct PairHash {
     std::size_t operator()(const std::pair<const GeomImpl*, const GeomImpl*>& p) const {
@@ -164,9 +168,11 @@ class CollisionManager {
   // planes directly.
   std::vector<GeomImpl*> planes_;
   std::vector<GeomImpl*> planes_only_;
-  // Resolved surfaces of the pairs that touched lately. Bounded (collision.cpp): a long run
-  // brings ever new pairs of robot parts together, up to tens of thousands.
+  // Resolved surfaces of the pairs that touched lately: a long run brings ever new pairs of
+  // robot parts together, up to tens of thousands, so stale ones are swept out (and a hard
+  // bound in collision.cpp).
   std::unordered_map<std::pair<const GeomImpl*, const GeomImpl*>, CachedSurface, PairHash> surfaces_;
+  std::uint64_t passes_ = 0;  // Collide() calls so far
   SurfaceMaterial contact_surface_;  // reused per contact: no allocation once warm
 };
 
