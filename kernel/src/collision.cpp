@@ -252,6 +252,11 @@ bool CollisionManager::MayCollide(const GeomImpl& a, const GeomImpl& b) {
   if (!InScope(a, b) || !InScope(b, a)) return false;
   if (!a.body() && !b.body()) return false;  // two static geometries never move apart
   if (a.body() == b.body()) return false;
+  // Two robots meet through their hulls only. Wheels, dribbler and kicker sit inside or at the
+  // hull; they touch another robot's parts only when the hulls overlap deeply (a teleport, a
+  // pile-up), and then in arbitrary directions: in the soak such contacts lifted a robot onto
+  // another and over the wall.
+  if (a.robot() && b.robot() && a.robot() != b.robot() && !(a.hull() && b.hull())) return false;
   const NodeImpl* na = &a.owner();
   const NodeImpl* nb = &b.owner();
   return !IsAncestorOrSelf(na, nb) && !IsAncestorOrSelf(nb, na);

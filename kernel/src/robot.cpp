@@ -111,6 +111,7 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
       present_(placement.present) {
   const RobotModel& m = *model_;
   node_ = static_cast<NodeImpl*>(&team_node.AddChild(std::to_string(id_.id)));
+  node_->set_robot();  // before any part: every geometry below knows its robot
   if (m.urdf_file.empty()) {
     BuildCylinderChassis(placement);
   } else {
@@ -205,7 +206,9 @@ void Robot::BuildCylinderChassis(const RobotPlacement& placement) {
   shell.offset.position = Vec3(0, 0, shell_centre - rest_height_);
   // Marked as the prism it is: two upright shells then meet exactly and fast (and two cylinder
   // shells meet at all: ODE has no cylinder-cylinder test).
-  static_cast<GeomImpl&>(node_->AddGeom(shell, chassis_)).set_prism(prism);
+  auto& hull = static_cast<GeomImpl&>(node_->AddGeom(shell, chassis_));
+  hull.set_prism(prism);
+  hull.set_hull(true);
 }
 
 void Robot::BuildUrdfBodies(const RobotPlacement& placement) {
@@ -243,7 +246,8 @@ void Robot::BuildUrdfBodies(const RobotPlacement& placement) {
       g.shape = link.collisions[c].shape;
       g.offset = com_inverse.Compose(link.collisions[c].origin);
       g.material = model_->surface;
-      owner.AddGeom(g, body);
+      // The root link's collision shapes are the robot's hull (what another robot touches).
+      static_cast<GeomImpl&>(owner.AddGeom(g, body)).set_hull(is_root);
     }
   }
   for (const UrdfJoint& j : urdf.joints) {

@@ -161,6 +161,9 @@ GeomImpl::GeomImpl(NodeImpl& owner, const GeomSpec& spec, BodyImpl* body)
       collides_(spec.collides),
       scope_(spec.scope),
       bounding_radius_(spec.shape.BoundingRadius()) {
+  for (const NodeImpl* n = &owner; n && !robot_; n = n->parent()) {
+    if (n->is_robot()) robot_ = n;
+  }
   const Shape& s = shape_;
   auto positive = [&](double v, const char* what) {
     if (!(v > 0.0) || !std::isfinite(v)) {

@@ -90,6 +90,12 @@ class GeomImpl final : public Geom {
   void set_prism(const FlatFrontPrism& prism) { prism_ = prism; }
   /// The prism this shell is, if marked.
   const std::optional<FlatFrontPrism>& prism() const { return prism_; }
+  /// The robot (its node, see NodeImpl::set_robot) this geometry belongs to, or null.
+  const NodeImpl* robot() const { return robot_; }
+  /// Marks the geometry as part of its robot's hull: two robots meet through their hulls only.
+  void set_hull(bool hull) { hull_ = hull; }
+  /// Part of its robot's hull.
+  bool hull() const { return hull_; }
   /// Marks the geometry as the ball (contacts report other_is_ball).
   void set_is_ball(bool b) { is_ball_ = b; }
   bool is_ball() const { return is_ball_; }  ///< this is the ball
@@ -103,6 +109,8 @@ class GeomImpl final : public Geom {
   std::uint64_t material_version_ = 0;
   std::optional<Vec3> friction_axis_;
   std::optional<FlatFrontPrism> prism_;
+  const NodeImpl* robot_ = nullptr;
+  bool hull_ = false;
   BodyImpl* body_;
   bool collides_;
   ContactScope scope_;
@@ -170,6 +178,10 @@ class NodeImpl final : public SceneNode {
   NodeImpl* FindChildNode(std::string_view name) const;
   /// Typed parent.
   NodeImpl* parent() const { return parent_; }
+  /// Marks this node as one robot's root: geometries added to its subtree afterwards belong to it.
+  void set_robot() { is_robot_ = true; }
+  /// This node is a robot's root.
+  bool is_robot() const { return is_robot_; }
   /// Graph this node belongs to.
   SceneGraph& graph() const { return graph_; }
   /// Recomputes this subtree's bounding spheres (children first); returns this node's.
@@ -184,6 +196,7 @@ class NodeImpl final : public SceneNode {
   NodeImpl* parent_;
   std::string name_;
   BoundingSphere bounds_;
+  bool is_robot_ = false;
   // Declaration order = reverse destruction order: joints go first, then geoms, bodies, children.
   std::vector<std::unique_ptr<NodeImpl>> children_;
   std::vector<std::unique_ptr<BodyImpl>> bodies_;
