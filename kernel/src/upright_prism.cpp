@@ -81,17 +81,38 @@ struct Touch {
   int spot_count = 0;
 };
 
+// Unit directions to try as separating axes (at most 24; the longest list, shell against box, has 20).
+struct Directions {
+  std::array<V2, 24> unit;
+  std::size_t count = 0;
+  void Add(const V2& v) {
+    const double length = v.norm();
+    if (length > 1e-12) unit[count++] = v / length;
+  }
+};
+
+// The least overlap of a and b over the directions, and the direction giving it, into t.
+// False when one of them separates them.
+template <typename Other>
+bool LeastOverlap(const Outline& a, const Other& b, const Directions& d, Touch& t) {
+  t.depth = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < d.count; ++i) {
+    const double overlap = Overlap(a, b, d.unit[i]);
+    if (overlap < t.depth) {
+      t.depth = overlap;
+      t.n = d.unit[i];
+    }
+  }
+  return t.depth > 0.0;
+}
+
 bool TouchAt(const Outline& a, const Outline& b, Touch& t) {
   // The overlap along a direction is, piece by piece, a constant plus a sinusoid of the angle
   // (each outline's support is an arc point or a fixed corner). Its least value, the depth, lies
   // where a piece is stationary (centre to centre, corner to centre, corner to corner) or where
   // pieces meet (a face's normal, a corner's radial direction): try them all.
-  std::array<V2, 16> candidates;
-  std::size_t count = 0;
-  auto add = [&](const V2& v) {
-    const double length = v.norm();
-    if (length > 1e-12) candidates[count++] = v / length;
-  };
+  Directions d;
+  auto add = [&](const V2& v) { d.Add(v); };
   add(b.centre - a.centre);
   if (a.has_face()) {
     add(a.forward);
@@ -112,16 +133,8 @@ bool TouchAt(const Outline& a, const Outline& b, Touch& t) {
       for (int j = 0; j < 2; ++j) add(b.Corner(j) - a.Corner(i));
     }
   }
-  if (count == 0) add(V2::UnitX());  // concentric discs: any direction
-  t.depth = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < count; ++i) {
-    const double d = Overlap(a, b, candidates[i]);
-    if (d < t.depth) {
-      t.depth = d;
-      t.n = candidates[i];
-    }
-  }
-  if (t.depth <= 0.0) return false;
+  if (d.count == 0) add(V2::UnitX());  // concentric discs: any direction
+  if (!LeastOverlap(a, b, d, t)) return false;
   // Seen from above they touch midway between the two deepest points; two flat faces pressed
   // together touch along the stretch where both faces lie, so both its ends count.
   const V2& n = t.n;
@@ -207,12 +220,8 @@ Reach DeepestAcross(const Rect& r, const V2& u, const V2& side, double parallel)
 // does (its face normal, its corners' radial directions), or where a piece is stationary (the
 // outline's centre or a corner toward a box corner).
 bool TouchAt(const Outline& a, const Rect& b, Touch& t) {
-  std::array<V2, 24> candidates;
-  std::size_t count = 0;
-  auto add = [&](const V2& v) {
-    const double length = v.norm();
-    if (length > 1e-12) candidates[count++] = v / length;
-  };
+  Directions d;
+  auto add = [&](const V2& v) { d.Add(v); };
   for (std::size_t i = 0; i < 2; ++i) {
     add(b.axis[i]);
     add(-b.axis[i]);
@@ -226,15 +235,7 @@ bool TouchAt(const Outline& a, const Rect& b, Touch& t) {
       for (int k = 0; k < 4; ++k) add(b.Corner(k) - a.Corner(i));
     }
   }
-  t.depth = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < count; ++i) {
-    const double d = Overlap(a, b, candidates[i]);
-    if (d < t.depth) {
-      t.depth = d;
-      t.n = candidates[i];
-    }
-  }
-  if (t.depth <= 0.0) return false;
+  if (!LeastOverlap(a, b, d, t)) return false;
   // They touch midway between the deepest points along n; where both are flat there, along the
   // stretch both edges share (both its ends), else across from the one deepest point.
   const V2& n = t.n;
