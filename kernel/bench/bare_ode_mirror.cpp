@@ -108,7 +108,8 @@ BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
   dWorldSetGravity(w, gravity[0], gravity[1], gravity[2]);
   dWorldSetERP(w, dWorldGetERP(from));
   dWorldSetCFM(w, dWorldGetCFM(from));
-  dWorldSetQuickStepNumIterations(w, dWorldGetQuickStepNumIterations(from));
+  const PhysicsModel& physics = world.model().physics;
+  islands_.SetIterations(physics.solver_iterations, physics.IterationsWithoutBall());
   dWorldSetContactSurfaceLayer(w, dWorldGetContactSurfaceLayer(from));
   dWorldSetContactMaxCorrectingVel(w, dWorldGetContactMaxCorrectingVel(from));
   dWorldSetAutoDisableFlag(w, 0);
@@ -124,6 +125,8 @@ BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
     body_of[b.id()] = bodies_.back().get();
   });
   ball_ = body_of.at(world.ball().id());
+  for (const OdeBody& b : bodies_) body_ids_.push_back(b.get());
+  ball_ids_.assign(1, ball_);
   kernel_ball_ = world.ball().id();
 
   // One carpet and one other static geometry to probe contact observers with.
@@ -313,7 +316,7 @@ void BareOdeMirror::Step() {
   last_contacts_ = 0;
   dSpaceCollide(space_.get(), this, &NearCallback);
   dRandSetSeed(ode_seed_);
-  dWorldQuickStep(world_.get(), step_);
+  islands_.Step(world_.get(), body_ids_, ball_ids_, step_);
   ode_seed_ = dRandGetSeed();
   dJointGroupEmpty(contacts_.get());
 }

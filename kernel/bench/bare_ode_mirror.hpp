@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "ubersim/kernel/island_stepper.hpp"
 #include "ubersim/kernel/ode_handles.hpp"
 #include "ubersim/kernel/world.hpp"
 
@@ -61,6 +62,8 @@ class BareOdeMirror {
   std::vector<OdeGeom> geoms_;
   std::vector<OdeJoint> joints_;
   std::vector<Motor> motors_;
+  IslandStepper islands_;                 // the kernel's iterations per island, in plain ODE calls
+  std::vector<dBodyID> body_ids_, ball_ids_;
   dBodyID ball_ = nullptr;
   dBodyID kernel_ball_ = nullptr;
   double step_ = 0.001;

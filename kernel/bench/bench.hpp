@@ -42,7 +42,14 @@ struct BenchResult {
   std::string file;            ///< world file
   int robots = 0;              ///< robots on the field
   double physics_step = 0;     ///< s
-  int solver_iterations = 0;   ///< QuickStep iterations
+  int solver_iterations = 0;   ///< QuickStep iterations (islands with the ball)
+  int solver_iterations_without_ball = 0;  ///< QuickStep iterations of the other islands
+  /// "10", or "10/6" when the islands without the ball take fewer.
+  std::string Iterations() const {
+    return solver_iterations == solver_iterations_without_ball
+               ? std::to_string(solver_iterations)
+               : std::to_string(solver_iterations) + "/" + std::to_string(solver_iterations_without_ball);
+  }
   int max_contacts = 0;        ///< contacts per geometry pair
   double sim_seconds = 0;      ///< simulated
   double wall_seconds = 0;     ///< spent in World::Step (not in the random play)

@@ -117,29 +117,35 @@ std::vector<fs::path> ToPaths(const std::vector<std::string>& v) {
   return std::vector<fs::path>(v.begin(), v.end());
 }
 
-// --physics-step, --solver-iterations, --max-contacts: one meaning and one check for every command
-// that tries other physics settings than the world files'.
+// --physics-step, --solver-iterations, --solver-iterations-without-ball, --max-contacts: one
+// meaning and one check for every command that tries other physics settings than the world files'.
 struct PhysicsFlags {
   double step = 0;
   int iterations = 0;
+  int iterations_without_ball = 0;
   int contacts = 0;
 
   void AddTo(po::options_description& desc) {
     desc.add_options()
         ("physics-step", po::value<double>(&step), "instead of the world files' physics step, s")
         ("solver-iterations", po::value<int>(&iterations), "instead of the world files' QuickStep iterations")
+        ("solver-iterations-without-ball", po::value<int>(&iterations_without_ball),
+         "QuickStep iterations of the islands no ball belongs to (default: --solver-iterations)")
         ("max-contacts", po::value<int>(&contacts), "instead of the world files' contacts per geometry pair");
   }
   // The settings given; false (with the reason on stderr) when one is out of range.
   bool Read(const po::variables_map& vm, const std::string& command, PhysicsOverrides& out) const {
     if ((vm.count("physics-step") && !(step > 0 && step <= 0.02)) || (vm.count("solver-iterations") && iterations < 1) ||
+        (vm.count("solver-iterations-without-ball") && iterations_without_ball < 1) ||
         (vm.count("max-contacts") && (contacts < 1 || contacts > 16))) {
       std::cerr << "ubersim " << command
-                << ": 0 < --physics-step <= 0.02, --solver-iterations >= 1, --max-contacts 1..16\n";
+                << ": 0 < --physics-step <= 0.02, --solver-iterations >= 1, --solver-iterations-without-ball >= 1, "
+                   "--max-contacts 1..16\n";
       return false;
     }
     if (vm.count("physics-step")) out.step = step;
     if (vm.count("solver-iterations")) out.solver_iterations = iterations;
+    if (vm.count("solver-iterations-without-ball")) out.solver_iterations_without_ball = iterations_without_ball;
     if (vm.count("max-contacts")) out.max_contacts = contacts;
     return true;
   }

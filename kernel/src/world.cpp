@@ -182,6 +182,7 @@ void World::Build() {
   dWorldSetERP(w, ph.erp);
   dWorldSetCFM(w, ph.cfm);
   dWorldSetQuickStepNumIterations(w, ph.solver_iterations);
+  islands_.SetIterations(ph.solver_iterations, ph.IterationsWithoutBall());
   dWorldSetContactSurfaceLayer(w, ph.contact_surface_layer);
   dWorldSetContactMaxCorrectingVel(w, ph.contact_max_correcting_velocity);
   dWorldSetAutoDisableFlag(w, 0);  // a resting ball must react at once; also keeps runs exact
@@ -465,7 +466,10 @@ void World::Step() {
   t0 = SteadyClock::now();
   // ODE's QuickStep draws from one process-wide generator; each world keeps its own sequence.
   dRandSetSeed(ode_random_seed_);
-  dWorldQuickStep(world_.get(), clock_.step_seconds());
+  body_ids_.clear();
+  scene_->Root().ForEachBody([this](BodyImpl& b) { body_ids_.push_back(b.id()); });
+  ball_ids_.assign(1, ball_->id());
+  islands_.Step(world_.get(), body_ids_, ball_ids_, clock_.step_seconds());
   ode_random_seed_ = dRandGetSeed();
   collision_->ClearContacts();
   timings_.physics_ns += ElapsedNs(t0);

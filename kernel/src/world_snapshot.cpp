@@ -70,6 +70,8 @@ std::uint64_t World::StructureDigest() const {
                    p.contact_surface_layer, p.contact_max_correcting_velocity}) {
     Mix(h, v);
   }
+  // Mixed in only when set, so a snapshot saved before the setting existed still restores.
+  if (p.solver_iterations_without_ball) Mix(h, static_cast<double>(*p.solver_iterations_without_ball));
   Mix(h, p.broadphase);
   for (const RobotPlacement& r : model_.robots) {
     Mix(h, Name(r.id));

@@ -17,6 +17,7 @@ using ubersim::PluginKind;
 using ubersim::kernel::ModelError;
 using ubersim::kernel::ModelLoader;
 using ubersim::kernel::PluginSchemaLookup;
+using ubersim::kernel::WorldModel;
 
 const fs::path kSource = UBERSIM_SOURCE_DIR;
 const fs::path kSchemas = kSource / "schemas";
@@ -386,6 +387,21 @@ TEST_F(Loader, ValueOutOfRange) {
   const auto id = WorldWith("robots:\n  - {team: blue, id: 16, model: r.yaml, x: 0, y: 0}\n");
   Expect(ErrorOf([&] { loader_.LoadWorld(id); }), id, 6, 18, "robots[0].id",
          "value 16 is above the maximum 15");
+}
+
+TEST_F(Loader, IslandsWithoutTheBallMayTakeFewerSolverIterations) {
+  const WorldModel shipped = ModelLoader(kSchemas, kAnyPlugin).LoadWorld(kModels / "worlds/div-b.yaml");
+  EXPECT_FALSE(shipped.physics.solver_iterations_without_ball);
+  EXPECT_EQ(shipped.physics.IterationsWithoutBall(), 20);  // absent: as solver_iterations
+
+  const WorldModel fast =
+      loader_.LoadWorld(WorldWith("physics:\n  solver_iterations: 10\n  solver_iterations_without_ball: 4\n"));
+  EXPECT_EQ(fast.physics.solver_iterations, 10);
+  EXPECT_EQ(fast.physics.IterationsWithoutBall(), 4);
+
+  const auto zero = WorldWith("physics:\n  solver_iterations_without_ball: 0\n");
+  Expect(ErrorOf([&] { loader_.LoadWorld(zero); }), zero, 6, 3, "physics.solver_iterations_without_ball",
+         "value 0 is below the minimum 1");
 }
 
 TEST_F(Loader, MissingRequiredKey) {

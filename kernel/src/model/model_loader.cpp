@@ -445,6 +445,9 @@ struct ModelLoader::Impl {
       PhysicsModel& m = w.physics;
       m.step = p.GetDouble("step", m.step);
       m.solver_iterations = static_cast<int>(p.GetInt("solver_iterations", m.solver_iterations));
+      if (p.Has("solver_iterations_without_ball")) {
+        m.solver_iterations_without_ball = static_cast<int>(p["solver_iterations_without_ball"].AsInt());
+      }
       m.erp = p.GetDouble("erp", m.erp);
       m.cfm = p.GetDouble("cfm", m.cfm);
       if (p.Has("gravity")) m.gravity = p["gravity"].AsVec3();

@@ -89,7 +89,11 @@ struct RobotPlacement {
 /// Physics settings of a world.
 struct PhysicsModel {
   double step = 0.001;             ///< fixed physics step, s
-  int solver_iterations = 20;      ///< QuickStep iterations
+  int solver_iterations = 20;      ///< QuickStep iterations (every island; the ball's islands)
+  /// QuickStep iterations for islands no ball belongs to; unset: solver_iterations
+  std::optional<int> solver_iterations_without_ball;
+  /// Iterations for islands no ball belongs to.
+  int IterationsWithoutBall() const { return solver_iterations_without_ball.value_or(solver_iterations); }
   double erp = 0.2;                ///< global ERP
   double cfm = 1e-7;               ///< global CFM
   Vec3 gravity = Vec3(0, 0, -9.81);  ///< m/s²
@@ -103,13 +107,15 @@ struct PhysicsModel {
 struct PhysicsOverrides {
   std::optional<double> step;           ///< fixed physics step, s
   std::optional<int> solver_iterations;  ///< QuickStep iterations
+  std::optional<int> solver_iterations_without_ball;  ///< QuickStep iterations of islands without a ball
   std::optional<int> max_contacts;       ///< contacts per geometry pair
   /// True when any is set.
-  bool Any() const { return step || solver_iterations || max_contacts; }
+  bool Any() const { return step || solver_iterations || solver_iterations_without_ball || max_contacts; }
   /// Sets those given in `physics`.
   void ApplyTo(PhysicsModel& physics) const {
     if (step) physics.step = *step;
     if (solver_iterations) physics.solver_iterations = *solver_iterations;
+    if (solver_iterations_without_ball) physics.solver_iterations_without_ball = *solver_iterations_without_ball;
     if (max_contacts) physics.max_contacts = *max_contacts;
   }
 };

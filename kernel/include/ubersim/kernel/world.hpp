@@ -14,6 +14,7 @@
 #include "ubersim/kernel/collision.hpp"
 #include "ubersim/kernel/event_queue.hpp"
 #include "ubersim/kernel/fault.hpp"
+#include "ubersim/kernel/island_stepper.hpp"
 #include "ubersim/kernel/model.hpp"
 #include "ubersim/kernel/ode_handles.hpp"
 #include "ubersim/kernel/perception.hpp"
@@ -152,6 +153,8 @@ class World {
   std::unique_ptr<SceneGraph> scene_;
   std::unique_ptr<CollisionManager> collision_;
   BodyImpl* ball_ = nullptr;
+  IslandStepper islands_;
+  std::vector<dBodyID> body_ids_, ball_ids_;  // the step's bodies for islands_, reused
   std::vector<std::unique_ptr<Robot>> robots_;
   std::vector<std::unique_ptr<TransportHost>> transports_;
   FieldGeometry field_geometry_;
