@@ -363,6 +363,7 @@ void CollisionManager::SweepFastBalls() {
   if (!balls_found_) {  // the scene is complete by the first step; a reset builds a new manager
     graph_.Root().ForEachGeom([&](GeomImpl& g) {
       if (g.is_ball() && g.body()) balls_.push_back(&g);
+      if (!g.is_plane()) sweep_targets_.push_back(&g);
     });
     balls_found_ = true;
   }
@@ -384,19 +385,21 @@ void CollisionManager::SweepFastBalls() {
     // The ray's box: only geometries whose boxes it reaches are tested.
     const Vec3 to = from + dir * (reach + radius);
     const Vec3 lo = from.cwiseMin(to), hi = from.cwiseMax(to);
-    graph_.Root().ForEachGeom([&](GeomImpl& other) {
-      if (&other == ball || other.is_plane() || !MayCollide(*ball, other)) return;
+    for (GeomImpl* target : sweep_targets_) {
+      GeomImpl& other = *target;
+      if (&other == ball || !MayCollide(*ball, other)) continue;
       dReal box[6];
       dGeomGetAABB(other.id(), box);
       if (box[1] < lo.x() || box[0] > hi.x() || box[3] < lo.y() || box[2] > hi.y() || box[5] < lo.z() ||
           box[4] > hi.z()) {
-        return;
+        continue;
       }
-      for (const auto& [a, b] : ball_touching_) {
-        if ((a == ball && b == &other) || (b == ball && a == &other)) return;  // touching already
-      }
+      const bool touching = std::any_of(ball_touching_.begin(), ball_touching_.end(), [&](const auto& pair) {
+        return (pair.first == ball && pair.second == &other) || (pair.second == ball && pair.first == &other);
+      });
+      if (touching) continue;  // its contacts are made already
       dContactGeom hit;
-      if (dCollide(ray_.get(), other.id(), 1, &hit, sizeof(dContactGeom)) <= 0) return;
+      if (dCollide(ray_.get(), other.id(), 1, &hit, sizeof(dContactGeom)) <= 0) continue;
       // The ball's surface reaches `other` within this step: a contact at the surface point,
       // normal out of `other` toward the ball, no depth (ODE stops the approach there).
       Vec3 normal = ToVec3(hit.normal);
@@ -411,7 +414,7 @@ void CollisionManager::SweepFastBalls() {
       cg.g2 = other.id();
       ++stats_.swept_contacts;
       AddContacts(*ball, other, 1);
-    });
+    }
   }
 }
 

@@ -72,10 +72,12 @@ class Robot::Context final : public RobotContext {
     }
     // The handler is plugin code running inside the collision manager: a throw or a non-finite
     // surface is this part's fault, and the contact goes on as if the handler had not run.
-    g->AddObserver([robot = &robot_, part = &part_, handler = std::move(handler)](
-                       const Contact& contact, SurfaceMaterial& surface, bool& accept) {
+    // `before` lives in the closure: assigning into it reuses its name's buffer, where a fresh
+    // copy per contact would allocate (a pair's name is longer than the short-string buffer).
+    g->AddObserver([robot = &robot_, part = &part_, handler = std::move(handler), before = SurfaceMaterial{}](
+                       const Contact& contact, SurfaceMaterial& surface, bool& accept) mutable {
       if (part->failed) return;
-      const SurfaceMaterial before = surface;
+      before = surface;
       const bool accepted = accept;
       std::string fault;
       try {

@@ -161,6 +161,7 @@ class CollisionManager {
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> ball_touching_;  // this step's ball pairs
   OdeGeom ray_;           // the swept test's ray, reused
   std::vector<GeomImpl*> balls_;  // the balls, found at the first swept test
+  std::vector<GeomImpl*> sweep_targets_;  // what a swept ball may reach: every geometry but planes
   bool balls_found_ = false;
   // With an ODE space: the planes, and the geometries that touch planes only (wheel ground
   // contacts, supports: nearly half a robot's). Those stay out of the space, where they would
