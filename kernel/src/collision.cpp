@@ -45,15 +45,11 @@ bool AabbsOverlap(dGeomID a, dGeomID b) {
 // box lies wholly on the plane's free side cannot touch it: skip dCollide, which for a trimesh
 // chassis riding over the carpet would test every vertex each step. Exact: ODE makes contacts
 // only where something penetrates the plane.
-bool AbovePlane(const GeomImpl& a, const GeomImpl& b) {
-  const bool a_plane = a.is_plane();
-  if (!a_plane && !b.is_plane()) return false;
-  const GeomImpl& plane = a_plane ? a : b;
-  const GeomImpl& other = a_plane ? b : a;
+bool BoxAbovePlane(dGeomID plane, dGeomID other) {
   dVector4 p;
-  dGeomPlaneGetParams(plane.id(), p);
+  dGeomPlaneGetParams(plane, p);
   dReal box[6];
-  dGeomGetAABB(other.id(), box);
+  dGeomGetAABB(other, box);
   double lowest = -p[3];
   for (int axis = 0; axis < 3; ++axis) {
     const double centre = 0.5 * (box[2 * axis] + box[2 * axis + 1]);
@@ -63,11 +59,24 @@ bool AbovePlane(const GeomImpl& a, const GeomImpl& b) {
   return lowest > 0.0;
 }
 
+bool AbovePlane(const GeomImpl& a, const GeomImpl& b) {
+  if (a.is_plane()) return BoxAbovePlane(a.id(), b.id());
+  if (b.is_plane()) return BoxAbovePlane(b.id(), a.id());
+  return false;
+}
+
 struct SpaceCallbackData {
   const std::function<void(GeomImpl&, GeomImpl&)>* f;
 };
 
 void SpaceNearCallback(void* data, dGeomID o1, dGeomID o2) {
+  if (dGeomIsSpace(o1) || dGeomIsSpace(o2)) {
+    // A robot's space: a whole robot riding over the carpet ends here; else pair up its parts.
+    if (dGeomGetClass(o1) == dPlaneClass && BoxAbovePlane(o1, o2)) return;
+    if (dGeomGetClass(o2) == dPlaneClass && BoxAbovePlane(o2, o1)) return;
+    dSpaceCollide2(o1, o2, data, &SpaceNearCallback);
+    return;
+  }
   auto* a = static_cast<GeomImpl*>(dGeomGetData(o1));
   auto* b = static_cast<GeomImpl*>(dGeomGetData(o2));
   if (!a || !b || !CollisionManager::MayCollide(*a, *b)) return;
@@ -191,22 +200,21 @@ CollisionManager::CollisionManager(SceneGraph& graph, Broadphase broadphase, int
 }
 
 CollisionManager::~CollisionManager() {
-  // Geometries outlive us (the scene graph owns them): take them out of our space first.
-  if (space_) {
-    graph_.Root().ForEachGeom([this](GeomImpl& g) {
-      if (dGeomGetSpace(g.id()) == space_.get()) dSpaceRemove(space_.get(), g.id());
-    });
-  }
+  // Geometries outlive us (the scene graph owns them): take them out of our spaces first.
+  Unfile();
   graph_.SetGeomListener(nullptr, nullptr);
 }
 
+void CollisionManager::Unfile() {
+  graph_.Root().ForEachGeom([](GeomImpl& g) {
+    if (dSpaceID s = dGeomGetSpace(g.id())) dSpaceRemove(s, g.id());
+  });
+  robot_spaces_.clear();  // each leaves space_ as it goes
+  space_.reset();
+}
+
 void CollisionManager::SetBroadphase(Broadphase broadphase) {
-  if (space_) {
-    graph_.Root().ForEachGeom([this](GeomImpl& g) {
-      if (dGeomGetSpace(g.id()) == space_.get()) dSpaceRemove(space_.get(), g.id());
-    });
-    space_.reset();
-  }
+  Unfile();
   broadphase_ = broadphase;
   if (broadphase == Broadphase::kHash) {
     space_.reset(dHashSpaceCreate(nullptr));
@@ -228,6 +236,15 @@ void CollisionManager::File(GeomImpl& g) {
   if (g.is_plane()) planes_.push_back(&g);
   if (g.scope() == ContactScope::kPlanesOnly && !g.is_plane()) {
     planes_only_.push_back(&g);
+    return;
+  }
+  if (g.robot() && !g.is_plane()) {
+    OdeSpace& robot_space = robot_spaces_[g.robot()];
+    if (!robot_space) {
+      robot_space.reset(dSimpleSpaceCreate(space_.get()));
+      dSpaceSetCleanup(robot_space.get(), 0);  // the scene graph owns the geometries
+    }
+    dSpaceAdd(robot_space.get(), g.id());
     return;
   }
   dSpaceAdd(space_.get(), g.id());

@@ -42,12 +42,49 @@ dSpaceID SpaceOf(const SceneGraph& graph) {
   graph.Root().ForEachGeom([&](GeomImpl& g) {
     if (!space) space = dGeomGetSpace(g.id());
   });
+  // A robot's parts sit in a space of their own inside the collision manager's.
+  while (space && dGeomGetSpace(reinterpret_cast<dGeomID>(space))) {
+    space = dGeomGetSpace(reinterpret_cast<dGeomID>(space));
+  }
   return space;
 }
 
 // ODE's sweep-and-prune space keeps the geometries moved since the last collision in a list
 // appended to as they move; its other spaces put each moved geometry at the front of theirs.
 bool AppendsMoved(dSpaceID space) { return dSpaceGetClass(space) == dSweepAndPruneSpaceClass; }
+
+// The body that moved an entry of a space's list this step, or null when it did not move: a
+// geometry's enabled body; for a robot's space, the body of its first part (its parts are listed
+// moved first, and a robot's bodies move together or not at all).
+dBodyID MovedBodyOf(dGeomID entry) {
+  if (dGeomIsSpace(entry)) {
+    const dSpaceID s = reinterpret_cast<dSpaceID>(entry);
+    return dSpaceGetNumGeoms(s) > 0 ? MovedBodyOf(dSpaceGetGeom(s, 0)) : nullptr;
+  }
+  const dBodyID b = dGeomGetBody(entry);
+  return b && dBodyIsEnabled(b) ? b : nullptr;
+}
+
+// Appends to `moved`, in the order they moved, the bodies that moved the leading entries of
+// `space`'s list; a robot's space contributes its own moved parts' bodies there, all at once
+// (its place in the outer list is its first move; the order inside it, its parts' moves).
+void CollectMoves(dSpaceID space, std::vector<dBodyID>& moved) {
+  std::vector<dGeomID> entries;
+  for (int i = 0, n = dSpaceGetNumGeoms(space); i < n; ++i) {
+    const dGeomID g = dSpaceGetGeom(space, i);
+    if (!MovedBodyOf(g)) break;
+    entries.push_back(g);
+  }
+  if (!AppendsMoved(space)) std::reverse(entries.begin(), entries.end());
+  for (dGeomID g : entries) {
+    if (dGeomIsSpace(g)) {
+      CollectMoves(reinterpret_cast<dSpaceID>(g), moved);
+    } else {
+      moved.push_back(dGeomGetBody(g));
+    }
+  }
+}
+
 
 void HashDouble(std::uint64_t& h, double v) {
   unsigned char bytes[sizeof v];
@@ -112,14 +149,8 @@ void CaptureOdeState(const SceneGraph& graph, SavedState& out) {
   // space puts moved ones at its front. Recorded as the bodies in move order.
   const dSpaceID space = SpaceOf(graph);
   if (!space) return;
-  const int n = dSpaceGetNumGeoms(space);
   std::vector<dBodyID> moved;
-  for (int i = 0; i < n; ++i) {
-    const dBodyID b = dGeomGetBody(dSpaceGetGeom(space, i));
-    if (!b || !dBodyIsEnabled(b)) break;
-    moved.push_back(b);
-  }
-  if (!AppendsMoved(space)) std::reverse(moved.begin(), moved.end());
+  CollectMoves(space, moved);
   for (dBodyID b : moved) {
     const auto it = body_index.find(b);
     if (it == body_index.end()) continue;

@@ -134,6 +134,8 @@ class CollisionManager {
   void ForEachPair(F& f);
   // Files a geometry: into the ODE space, or, when it touches planes only, beside it.
   void File(GeomImpl& g);
+  // Takes every geometry out of the ODE spaces and drops the spaces.
+  void Unfile();
   // The resolved surface of two touching geometries, cached per pair while neither material
   // nor the table changes (resolving compares and joins names: every contact, every step).
   const SurfaceMaterial& PairSurface(const GeomImpl& a, const GeomImpl& b);
@@ -169,6 +171,11 @@ class CollisionManager {
   // planes directly.
   std::vector<GeomImpl*> planes_;
   std::vector<GeomImpl*> planes_only_;
+  // With an ODE space: each robot's other geometries in a simple space of their own inside it.
+  // The broadphase then sorts one box per robot instead of each part's (pairs of one robot's
+  // parts are all refused anyway), and a robot's box above the carpet skips its parts' plane
+  // tests at once. Declared after space_: destroyed first, leaving it.
+  std::unordered_map<const NodeImpl*, OdeSpace> robot_spaces_;
   // Resolved surfaces of the pairs that touched lately: a long run brings ever new pairs of
   // robot parts together, up to tens of thousands, so stale ones are swept out (and a hard
   // bound in collision.cpp).
