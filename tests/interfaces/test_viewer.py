@@ -541,7 +541,10 @@ class ViewerInBrowser(unittest.TestCase):
             # the world `rate` times a wall-clock second, but when the world stops between two
             # samples it fetches the exact state at once. So last frame <= T < first frame.
             self.assertLess(t0, first.t_capture)
-            self.assertGreaterEqual(t0, last.t_capture, "the page's paused time lags the simulator")
+            # T may be the last frame's own step: equal times, which reach us by two roads (the
+            # page's state in seconds, the frame's capture time from SSL-Vision's packet) and can
+            # differ in the last bit (6.417 against 6.417000000000001): a microsecond's slack.
+            self.assertGreaterEqual(t0 + 1e-6, last.t_capture, "the page's paused time lags the simulator")
             lag = last.t_capture - t0
             print(f"\npaused at t = {t0:.3f} s ({len(times)} samples); last frame before at "
                   f"{last.t_capture:.3f} s, first after at {first.t_capture:.3f} s"
