@@ -85,7 +85,6 @@ void CollectMoves(dSpaceID space, std::vector<dBodyID>& moved) {
   }
 }
 
-
 void HashDouble(std::uint64_t& h, double v) {
   unsigned char bytes[sizeof v];
   std::memcpy(bytes, &v, sizeof v);

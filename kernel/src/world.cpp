@@ -181,7 +181,6 @@ void World::Build() {
   dWorldSetGravity(w, ph.gravity.x(), ph.gravity.y(), ph.gravity.z());
   dWorldSetERP(w, ph.erp);
   dWorldSetCFM(w, ph.cfm);
-  dWorldSetQuickStepNumIterations(w, ph.solver_iterations);
   islands_.SetIterations(ph.solver_iterations, ph.IterationsWithoutBall());
   dWorldSetContactSurfaceLayer(w, ph.contact_surface_layer);
   dWorldSetContactMaxCorrectingVel(w, ph.contact_max_correcting_velocity);

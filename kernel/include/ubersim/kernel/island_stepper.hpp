@@ -15,12 +15,9 @@ namespace ubersim::kernel {
 /// robot driving on its own settles in a few. With equal counts it is exactly one QuickStep.
 class IslandStepper {
  public:
-  /// QuickStep iterations for islands holding a ball, and for every other island.
+  /// QuickStep iterations for islands holding a ball, and for every other island (Step sets the
+  /// world's count before each QuickStep).
   void SetIterations(int ball_islands, int other_islands);
-  /// Iterations for islands holding a ball.
-  int ball_iterations() const { return ball_iterations_; }
-  /// Iterations for the other islands.
-  int other_iterations() const { return other_iterations_; }
 
   /// One physics step of `world` (whose every body is in `bodies`) by `dt` seconds; `balls` are
   /// the balls' bodies. Bodies disabled before the step stay disabled.
