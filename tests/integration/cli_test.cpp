@@ -103,6 +103,13 @@ TEST(Cli, BenchPrintsEachWorldWithItsBaselineAndRefusesBadOptions) {
   EXPECT_NE(r.output.find("bench.md"), std::string::npos) << r.output;
   const Result bad = RunUbersim("bench --physics-step 0.5");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  const Result split = RunUbersim(
+      "bench ssl-2003 --duration 0.05 --no-baseline --solver-iterations 10 --solver-iterations-without-ball 6");
+  EXPECT_EQ(split.exit_code, 0) << split.output;
+  EXPECT_NE(split.output.find(" 10/6 "), std::string::npos) << "the iterations column names both" << split.output;
+  const Result zero = RunUbersim("bench --solver-iterations-without-ball 0");
+  EXPECT_EQ(zero.exit_code, 2) << zero.output;
+  EXPECT_NE(zero.output.find("--solver-iterations-without-ball >= 1"), std::string::npos) << zero.output;
   const Result missing = RunUbersim("bench no-such-world --duration 0.05");
   EXPECT_EQ(missing.exit_code, 3) << missing.output;
   EXPECT_NE(missing.output.find("no-such-world"), std::string::npos) << missing.output;
