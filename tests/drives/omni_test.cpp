@@ -1,13 +1,16 @@
 // SPDX-License-Identifier: Apache-2.0
 // The omni drive on the modern four-wheel robot: steady speeds forward, sideways, diagonally and
 // turning within 3 % of the command; speed-up following the acceleration limit within 5 %;
-// braking to a stop after the command timeout.
+// braking to a stop after the command timeout; the motor's rotor inertia on the wheel's axle.
 #include <cmath>
 #include <sstream>
 
 #include <gtest/gtest.h>
 
+#include <ode/ode.h>
+
 #include "omni_world.hpp"
+#include "ubersim/kernel/scene_graph.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -100,6 +103,22 @@ TEST(OmniDrive, WheelSpeedCommandMustMatchTheWheelCount) {
   w.world->ProcessEvents();
   EXPECT_EQ(w.world->event_counters().rejected, 1);
   EXPECT_NE(w.text.str().find("3 speeds, this robot has 4 wheels"), std::string::npos) << w.text.str();
+}
+
+// The motor's rotor turns with the wheel through its gears: the model's rotor_inertia adds to the
+// wheel's inertia about its axle, and nothing to its mass (the motor rides on the chassis).
+TEST(OmniDrive, TheRotorAddsInertiaAboutTheAxleOnly) {
+  OmniWorld w;
+  Body* wheel = w.world->scene().Find("blue/0/wheel0")->FindBody("wheel");
+  ASSERT_NE(wheel, nullptr);
+  dMass m;
+  dBodyGetMass(static_cast<BodyImpl*>(wheel)->id(), &m);
+  const double r = 0.029, width = 0.01, mass = 0.05, rotor = 1.6e-4;  // models/robots/ssl-omni-2026.yaml
+  EXPECT_DOUBLE_EQ(m.mass, mass);
+  // The cylinder's axis (body z) is the axle.
+  EXPECT_NEAR(m.I[2 * 4 + 2], 0.5 * mass * r * r + rotor, 1e-12);
+  EXPECT_NEAR(m.I[0], mass * (3 * r * r + width * width) / 12, 1e-12);
+  EXPECT_NEAR(m.I[1 * 4 + 1], mass * (3 * r * r + width * width) / 12, 1e-12);
 }
 
 }  // namespace

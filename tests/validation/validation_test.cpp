@@ -121,15 +121,17 @@ TEST(PhysicsValidation, PaperFigureEightAtPointEightMetresPerSecond) {
   EXPECT_TRUE(r.plots.at(0).equal_axes);  // a path on the field keeps its shape
 }
 
-// The fast settings docs/performance.md measures Div A at: 5 ms, 10 iterations for the ball's
-// islands and 6 for the others, one contact per pair. Every number keeps its band (at 5 for the
-// others the 2003 robot's servo misses its profile: the check can fail).
-TEST(PhysicsValidation, TheFastSettingsKeepEveryNumber) {
+// Runs every scenario `pick` accepts at 5 ms, one contact per pair, 10 solver iterations for the
+// ball's islands and `other_iterations` for the rest, and expects every number in its band.
+void ExpectFastSettingsKeep(int other_iterations, bool (*pick)(const std::string& id)) {
+  int run = 0;
   for (const Scenario& s : AllScenarios()) {
+    if (!pick(s.id)) continue;
+    ++run;
     Env e;
     e.env.physics.step = 0.005;
     e.env.physics.solver_iterations = 10;
-    e.env.physics.solver_iterations_without_ball = 6;
+    e.env.physics.solver_iterations_without_ball = other_iterations;
     e.env.physics.max_contacts = 1;
     const ScenarioResult r = s.run(e.env);
     EXPECT_FALSE(r.metrics.empty()) << s.id;
@@ -138,6 +140,25 @@ TEST(PhysicsValidation, TheFastSettingsKeepEveryNumber) {
                             << " … " << m.high;
     }
   }
+  EXPECT_GT(run, 0);
+}
+
+bool IsPaperScenario(const std::string& id) { return id.rfind("paper_", 0) == 0; }
+
+// The fast settings docs/performance.md measures Div A at: 5 ms, 10 iterations for the ball's
+// islands and 2 for the others, one contact per pair. Every number of the ball, the modern
+// robots (both drives), the kicker and the dribbler keeps its band. Without the wheels' rotor
+// inertia (models/robots/ssl-omni-2026.yaml) the omni robot's sideways speed falls 5 % short
+// at 2 iterations: the check can fail.
+TEST(PhysicsValidation, TheFastSettingsKeepEveryNumberOfTheModernRobots) {
+  ExpectFastSettingsKeep(2, [](const std::string& id) { return !IsPaperScenario(id); });
+}
+
+// The 2003 world's fast settings: its differential robot on two wheels and two casters needs 6
+// iterations for the islands without the ball (at 5 its servo misses the acceleration profile by
+// 0.059 m/s rms against 0.05, at 2 its wheels barely grip: the check can fail).
+TEST(PhysicsValidation, TheFastSettingsOfThe2003WorldKeepThePapersNumbers) {
+  ExpectFastSettingsKeep(6, IsPaperScenario);
 }
 
 TEST(PhysicsValidation, EveryScenarioIsCoveredHere) {

@@ -71,6 +71,7 @@ class DiffDrive final : public ubersim::Drive {
     if (p.Has("motor")) {
       max_torque_ = p["motor"].GetDouble("max_torque", max_torque_);
       max_wheel_speed_ = p["motor"].GetDouble("max_speed", max_wheel_speed_);
+      rotor_inertia_ = p["motor"].GetDouble("rotor_inertia", rotor_inertia_);
     }
     ubersim::ServoLimits limits;  // the 2003 robots' defaults (schema)
     limits.max_speed = 2.0;
@@ -115,6 +116,7 @@ class DiffDrive final : public ubersim::Drive {
       w.mass = mass;
       w.tyre = tyre_surface;
       w.holding_torque = max_torque_;
+      w.rotor_inertia = rotor_inertia_;
       wheels_[i] = &ubersim::AddDrivenWheel(ctx, w);
     }
     AddCasters(ctx, p, caster_surface, chassis_z);
@@ -258,6 +260,7 @@ class DiffDrive final : public ubersim::Drive {
   double separation_ = 0.14;       // between the wheels' contact points, m
   double max_torque_ = 0.3;        // N·m
   double max_wheel_speed_ = 100;   // rad/s
+  double rotor_inertia_ = 0;       // kg·m², reflected to the wheel
   double caster_stiffness_ = 10000;  // N/m
   double caster_damping_ = 100;      // N·s/m
   double dt_ = 0.001;               // s, the step being run

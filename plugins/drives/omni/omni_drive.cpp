@@ -43,6 +43,7 @@ class OmniDrive final : public ubersim::Drive {
     if (p.Has("motor")) {
       max_torque_ = p["motor"].GetDouble("max_torque", max_torque_);
       max_wheel_speed_ = p["motor"].GetDouble("max_speed", max_wheel_speed_);
+      rotor_inertia_ = p["motor"].GetDouble("rotor_inertia", rotor_inertia_);
     }
     if (p.Has("limits")) servo_.SetLimits(ubersim::ReadServoLimits(p["limits"], servo_.Limits()));
     watchdog_.SetTimeout(p.GetDouble("command_timeout", watchdog_.Timeout()));
@@ -82,6 +83,7 @@ class OmniDrive final : public ubersim::Drive {
       spec.tyre = surface;
       spec.rollers_along_axle = true;  // mu along the axle (free rollers), mu2 across it
       spec.holding_torque = max_torque_;
+      spec.rotor_inertia = rotor_inertia_;
       w.hinge = &ubersim::AddDrivenWheel(ctx, spec);
       wheels_.push_back(w);
     }
@@ -186,6 +188,7 @@ class OmniDrive final : public ubersim::Drive {
   double distance_ = 0.08;
   double max_torque_ = 0.5;
   double max_wheel_speed_ = 150;
+  double rotor_inertia_ = 0;  // kg·m², reflected to the wheel
   ubersim::VelocityServo servo_;       // the (forward, left, angular) setpoint the wheels follow
   ubersim::CommandWatchdog watchdog_{0.1};
   ubersim::MoveCommand command_;

@@ -23,6 +23,8 @@ struct WheelSpec {
   /// wheel's free rollers); unset: the same grip every way.
   bool rollers_along_axle = false;
   double holding_torque = 0.5;         ///< N·m the motor holds the wheel still with until commanded
+  /// kg·m² the motor's rotor and gears add about the axle (rotor inertia × gear ratio²).
+  double rotor_inertia = 0.0;
 };
 
 /// Builds a wheel body on a motorised hinge to the chassis and returns the hinge (drive it with
@@ -39,6 +41,9 @@ inline Joint& AddDrivenWheel(RobotContext& ctx, const WheelSpec& spec) {
   BodySpec body;
   body.name = "wheel";
   body.mass = MassSpec::Solid(Shape::Cylinder(spec.radius, spec.width), spec.mass);
+  // The motor spins with the wheel through its gears: its rotor adds inertia about the axle (the
+  // cylinder's z) but no mass the carpet carries apart from the chassis's.
+  body.mass.inertia_diagonal.z() += spec.rotor_inertia;
   body.pose = chassis_pose.Compose(Pose{spec.centre, axle_in_chassis});
   body.twist = chassis.GetTwist();
   Body& wheel = node.AddBody(body);
