@@ -27,13 +27,20 @@ struct PlayedWorld {
   std::unique_ptr<World> world;
   std::unique_ptr<bench::RandomPlay> play;
 
-  explicit PlayedWorld(const std::string& name, double step) {
+  // `robot`: a robot file under models/robots/ every robot of the world becomes; empty: as shipped.
+  explicit PlayedWorld(const std::string& name, double step, const PhysicsOverrides& fast = {},
+                       const std::string& robot = "") {
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(), [this](PluginKind k, const std::string& id) {
       return registry.Find(k, id).schema_json;
     });
     WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/" + name + ".yaml");
     model.transports.clear();
     if (step > 0) model.physics.step = step;
+    fast.ApplyTo(model.physics);
+    if (!robot.empty()) {
+      const auto swapped = loader.LoadRobot(UBERSIM_SOURCE_DIR "/models/robots/" + robot);
+      for (RobotPlacement& r : model.robots) r.model = swapped;
+    }
     world = std::make_unique<World>(model, registry, log, false);
     play = std::make_unique<bench::RandomPlay>(*world, 1);
     for (int i = 0; i < 200; ++i) Step();  // past the start, robots moving
@@ -65,6 +72,24 @@ void BM_WorldStep5ms(benchmark::State& state) {
       w.world->clock().step_seconds() * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_WorldStep5ms)->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
+
+// Div A at the validated fast settings (docs/performance.md): 5 ms, 10 solver iterations for
+// the ball's islands and 2 for the rest, one contact per pair; with the wheel-body omni drive
+// (0) and the single-body omni_force drive (1).
+void BM_DivAFastSettings(benchmark::State& state) {
+  PhysicsOverrides fast;
+  fast.step = 0.005;
+  fast.solver_iterations = 10;
+  fast.solver_iterations_without_ball = 2;
+  fast.max_contacts = 1;
+  const bool force = state.range(0) == 1;
+  PlayedWorld w("div-a", 0.0, fast, force ? "ssl-omni-2026-force.yaml" : "");
+  for (auto _ : state) w.Step();
+  state.SetLabel(force ? "div-a omni_force" : "div-a omni");
+  state.counters["real_time_factor"] = benchmark::Counter(
+      w.world->clock().step_seconds() * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_DivAFastSettings)->DenseRange(0, 1)->Unit(benchmark::kMicrosecond);
 
 // A camera frame of Div A (22 robots, the ball) as the frames the perception pipeline makes.
 VisionFrame DivAFrame() {
