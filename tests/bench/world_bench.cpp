@@ -28,15 +28,14 @@ struct PlayedWorld {
   std::unique_ptr<bench::RandomPlay> play;
 
   // `robot`: a robot file under models/robots/ every robot of the world becomes; empty: as shipped.
-  explicit PlayedWorld(const std::string& name, double step, const PhysicsOverrides& fast = {},
+  explicit PlayedWorld(const std::string& name, const PhysicsOverrides& physics = {},
                        const std::string& robot = "") {
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(), [this](PluginKind k, const std::string& id) {
       return registry.Find(k, id).schema_json;
     });
     WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/" + name + ".yaml");
     model.transports.clear();
-    if (step > 0) model.physics.step = step;
-    fast.ApplyTo(model.physics);
+    physics.ApplyTo(model.physics);
     if (!robot.empty()) {
       const auto swapped = loader.LoadRobot(UBERSIM_SOURCE_DIR "/models/robots/" + robot);
       for (RobotPlacement& r : model.robots) r.model = swapped;
@@ -55,7 +54,7 @@ const char* const kWorlds[] = {"ssl-2003", "div-b", "div-a"};
 
 // One step (events, plugins, collision, ODE, cameras) at the world file's own settings.
 void BM_WorldStep(benchmark::State& state) {
-  PlayedWorld w(kWorlds[state.range(0)], 0.0);
+  PlayedWorld w(kWorlds[state.range(0)]);
   for (auto _ : state) w.Step();
   state.SetLabel(kWorlds[state.range(0)]);
   state.counters["real_time_factor"] = benchmark::Counter(
@@ -65,7 +64,9 @@ BENCHMARK(BM_WorldStep)->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
 
 // The same at a 5 ms step, the coarsest the league's simulators use.
 void BM_WorldStep5ms(benchmark::State& state) {
-  PlayedWorld w(kWorlds[state.range(0)], 0.005);
+  PhysicsOverrides coarse;
+  coarse.step = 0.005;
+  PlayedWorld w(kWorlds[state.range(0)], coarse);
   for (auto _ : state) w.Step();
   state.SetLabel(kWorlds[state.range(0)]);
   state.counters["real_time_factor"] = benchmark::Counter(
@@ -83,7 +84,7 @@ void BM_DivAFastSettings(benchmark::State& state) {
   fast.solver_iterations_without_ball = 2;
   fast.max_contacts = 1;
   const bool force = state.range(0) == 1;
-  PlayedWorld w("div-a", 0.0, fast, force ? "ssl-omni-2026-force.yaml" : "");
+  PlayedWorld w("div-a", fast, force ? "ssl-omni-2026-force.yaml" : "");
   for (auto _ : state) w.Step();
   state.SetLabel(force ? "div-a omni_force" : "div-a omni");
   state.counters["real_time_factor"] = benchmark::Counter(
@@ -124,7 +125,7 @@ BENCHMARK(BM_VisionDetectionPacket);
 
 // Viewer state message (JSON) of Div A with one camera frame.
 void BM_ViewerStateMessage(benchmark::State& state) {
-  PlayedWorld w("div-a", 0.0);
+  PlayedWorld w("div-a");
   viewer::WorldSample sample;
   viewer::SampleSnapshot(w.world->Snapshot(), sample);
   const std::vector<VisionFrame> frames{DivAFrame()};
