@@ -94,6 +94,9 @@ class Robot::Context final : public RobotContext {
       robot->Fail(*part, "contact handler", fault);
     });
   }
+  SurfaceMaterial CarpetSurface(const SurfaceMaterial& own) const override {
+    return services_.materials ? services_.materials->Resolve(own, services_.carpet) : MaterialTable{}.Resolve(own, services_.carpet);
+  }
   PrefixedLog& log() { return log_; }
 
  private:

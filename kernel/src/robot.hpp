@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "ubersim/component.hpp"
+#include "ubersim/kernel/collision.hpp"
 #include "ubersim/kernel/fault.hpp"
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/model.hpp"
@@ -23,6 +24,8 @@ struct RobotServices {
   const std::int64_t* sim_time_ns = nullptr;  ///< the world's clock
   FaultMonitor* faults = nullptr;              ///< where plugin faults are reported
   const LastGoodState* last_good = nullptr;    ///< what bodies a fault broke are put back to
+  const MaterialTable* materials = nullptr;    ///< the world's material pairs
+  SurfaceMaterial carpet;                      ///< the carpet's surface
 };
 
 /// One part's state as a snapshot keeps it.

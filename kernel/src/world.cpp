@@ -209,6 +209,8 @@ void World::Build() {
   services.sim_time_ns = &sim_time_ns_;
   services.faults = &faults_;
   services.last_good = &last_good_;
+  services.materials = &collision_->materials();
+  services.carpet = model_.field->carpet;
   for (const RobotPlacement& p : model_.robots) {
     if (FindRobot(p.id)) {
       throw std::runtime_error(model_.file + ": robot " + Describe(p.id) + " is placed twice");

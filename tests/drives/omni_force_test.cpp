@@ -135,18 +135,38 @@ TEST(OmniForceDrive, IsOneBodyStandingAsHighAsOnWheels) {
   ForceWorld w;
   NodeImpl* robot = w.world->scene().Find("blue/0");
   EXPECT_EQ(robot->FindChild("wheel0"), nullptr);  // no wheel bodies…
-  EXPECT_NE(robot->FindGeom("wheel0"), nullptr);   // …a support sphere per wheel on the chassis
+  EXPECT_EQ(robot->FindGeom("wheel0"), nullptr);   // …and nothing of the wheels touches the carpet
   w.Step(20);
-  EXPECT_NEAR(w.Robot().pose.position.z(), kRestHeight, 1e-4);  // dropped into place
+  EXPECT_NEAR(w.Robot().pose.position.z(), kRestHeight, 1e-9);  // put where it rests
   w.Step(980);
   const RobotState r = w.Robot();
   // No command: the wheels hold it where it was put.
   EXPECT_NEAR(r.pose.position.x(), -2.0, 1e-5);
   EXPECT_NEAR(r.pose.position.y(), 0.0, 1e-5);
-  // Where the wheel-body robot settles; the landing pressed the supports 40 µm into the carpet.
-  EXPECT_NEAR(r.pose.position.z(), kRestHeight, 1e-4);
-  EXPECT_LT(Tilt(r), 1e-4);
+  // Where the wheel-body robot settles, level and still.
+  EXPECT_NEAR(r.pose.position.z(), kRestHeight, 1e-9);
+  EXPECT_LT(Tilt(r), 1e-7);  // acos resolves 1e-8
   EXPECT_LT(r.twist.linear.norm(), 1e-5);
+}
+
+TEST(OmniForceDrive, FallsWhenLiftedAndLandsLevelWhereItRests) {
+  ForceWorld w;
+  w.Step(20);
+  Body& chassis = *w.world->scene().Find("blue/0")->FindBody("chassis");
+  // 5 cm up and tilted 0.05 rad about x (not enough for the shell to touch first): its wheels
+  // are off the carpet, nothing holds it.
+  chassis.SetPose(Pose{Vec3(-2.0, 0.0, kRestHeight + 0.05), Quat(Eigen::AngleAxisd(0.05, Vec3::UnitX()))});
+  w.Step(50);  // 50 ms: free fall takes 101 ms
+  EXPECT_NEAR(w.Robot().pose.position.z(), kRestHeight + 0.05 - 0.5 * 9.81 * 0.05 * 0.05, 1e-3);
+  EXPECT_NEAR(w.Robot().twist.linear.z(), -9.81 * 0.05, 0.01);
+  EXPECT_NEAR(Tilt(w.Robot()), 0.05, 1e-6);
+  w.Step(70);  // landed
+  const RobotState r = w.Robot();
+  EXPECT_NEAR(r.pose.position.z(), kRestHeight, 1e-9);
+  EXPECT_LT(Tilt(r), 1e-7);  // acos resolves 1e-8
+  EXPECT_LT(std::abs(r.twist.linear.z()), 1e-9);
+  EXPECT_LT(r.twist.angular.norm(), 1e-9);
+  EXPECT_NEAR(r.pose.position.x(), -2.0, 1e-4);
 }
 
 TEST(OmniForceDrive, TheWorldsWheelCarpetFrictionIsTheWheelsGripAndTheSupportsHaveNone) {
@@ -246,8 +266,9 @@ TEST(OmniForceDrive, BrakesToAStopAfterTheCommandTimeout) {
 
 TEST(OmniForceDrive, StaysLevelReversingAtFullSpeedAndAgainstAWall) {
   // The wheels push at the carpet, 5 cm below the centre of mass: braking from 3 m/s to -3 m/s
-  // (6 m/s², 15 N) pitches the robot onto its front supports. They are rigid: it must neither
-  // tip nor bounce. (The wheel-body robot leans up to 6 mrad on its hinges here.)
+  // (6 m/s², 15 N) pitches the robot onto its front wheels, and the wall's push pitches it too.
+  // Its wheels are rigid: it must neither tip nor bounce. (The wheel-body robot leans up to
+  // 6 mrad on its hinges here.)
   ForceWorld w;
   w.Step(20);  // dropped into place
   double tilt = 0, low = 1, high = 0;
@@ -351,6 +372,7 @@ class ProbeContext final : public RobotContext {
   double BallRadius() const override { return 0.0215; }
   Vec3 Gravity() const override { return Vec3(0, 0, -9.81); }
   void ObserveContacts(Geom& own, ContactHandler) override { own.SetCollides(false); }
+  SurfaceMaterial CarpetSurface(const SurfaceMaterial& own) const override { return own; }
 
  private:
   SceneNode& node_;

@@ -2,16 +2,23 @@
 // omni_force: the omni drive as one rigid body per robot, for speed.
 //
 // The omni drive makes a body per wheel on a motorised hinge and lets ODE's contact friction move
-// the robot. This drive makes no wheel bodies. The chassis stands on one frictionless sphere per
-// wheel (the wheel's radius, at the wheel's centre: the same height as on wheels), and every step
-// each wheel's force on the carpet is computed and applied to the chassis at the wheel's contact
-// point, as the ER-Force simulator drives its robots:
+// the robot. This drive makes no wheel bodies and no wheel contacts. Every step each wheel's force
+// on the carpet is computed and applied to the chassis, as the ER-Force simulator drives its robots:
 //
 //   - along the rolling direction the wheel's motor is a velocity servo against the carpet: it
 //     pushes the contact point toward the wheel's surface speed ω·r with the force that would get
 //     there in one step if it moved its share of the robot (mass / wheel count), at most the
 //     motor's max_torque / r and at most mu_roll times its share of the weight;
 //   - along the axle the free rollers resist sliding with at most mu_axle times that share.
+//
+// The wheels also hold the robot up, as rigid wheels on a flat carpet would, without a contact:
+// while the robot is down (its centre of mass at most kGripHeight above where it rests) the drive
+// carries its weight during the step and after it puts the chassis back level at its resting
+// height, with no vertical or tilting speed. What a collision did to those is taken by the carpet:
+// the robot does not tilt, bounce or lift off (nor does a real one: its centre of mass is 5 cm up
+// on an 18 cm footprint). Lifted higher (a teleport into the air) it falls until it lands. Four
+// support contacts on the carpet instead (as before) were 40 % of a Div A step's work: speed is
+// what this drive exists for.
 //
 // Simplifications: each wheel carries a fixed share of the weight (m·g / n) whatever the robot
 // does — no load transfer while braking or turning, as in ER-Force's simulator — and a wheel has
@@ -36,27 +43,23 @@ using ubersim::Vec3;
 struct Wheel {
   Vec3 centre;        // wheel centre in the chassis frame (origin at the centre of mass), m
   Vec3 tangent;       // rolling direction in the robot frame (counter-clockwise)
-  double mu_roll = 0.8;   // carpet friction along the rolling direction, as last resolved
-  double mu_axle = 0.05;  // along the axle (the rollers), as last resolved
 };
 
-// A wheel grips while its lowest point is at most this far above the carpet, m. Geometric, not
-// "its support made a contact this step": a sphere resting on the carpet touches it at a depth
-// of a micrometre and drops out of ODE's contact list at the slightest pitch, and one wheel
-// missing for a step would yaw the robot.
+// The robot stands on its wheels while its centre of mass is at most this far above where it
+// rests, m; higher, its wheels are off the carpet (they push nothing and carry nothing).
 constexpr double kGripHeight = 0.002;
 // How far a wheel-body robot settles into the carpet, m: ODE lets a resting contact sink through
 // the world's contact layer (contact_surface_layer: 0.5 mm by default and in every shipped world)
 // before pushing back, and the omni drive's wheel contacts drift down through it within seconds
-// (the robot comes to rest 0.5 mm low). The one-body robot's four supports on one rigid body
-// would creep through it at a micrometre a second, so they are placed this much higher: the
-// robot drops into the same place in its first 10 ms. The dribbler's reach into the ball is
-// tuned to that height (a rigid robot 0.5 mm high does not draw in a ball 2 mm off its face).
+// (the robot comes to rest 0.5 mm low). This robot rests as low, so the two meet the ball alike:
+// the dribbler's reach into the ball is tuned to that height (a robot 0.5 mm higher does not
+// draw in a ball 2 mm off its face).
 constexpr double kSettle = 0.0005;
 // Largest yaw gain of the wheel servos (1 reaches the target in one step, 2 oscillates forever).
 constexpr double kMaxYawGain = 1.8;
-// Layout of SaveState's bytes: bump when they change.
-constexpr std::uint32_t kStateLayout = 1;
+// Layout of SaveState's bytes: bump when they change. 2: no per-wheel friction (it is the
+// world's, resolved once).
+constexpr std::uint32_t kStateLayout = 2;
 
 class OmniForceDrive final : public ubersim::Drive {
  public:
@@ -75,7 +78,7 @@ class OmniForceDrive final : public ubersim::Drive {
     if (p.Has("limits")) servo_.SetLimits(ubersim::ReadServoLimits(p["limits"], servo_.Limits()));
     watchdog_.SetTimeout(p.GetDouble("command_timeout", watchdog_.Timeout()));
     // The same surface as the omni drive's tyres: the world's table pair <name>|carpet, or the
-    // two surfaces combined, decides the friction; the support contacts report it (below).
+    // two surfaces combined, decides the wheels' grip.
     ubersim::SurfaceMaterial surface;
     surface.name = "omni_wheel";
     surface.mu = 0.05;   // along the axle
@@ -86,6 +89,9 @@ class OmniForceDrive final : public ubersim::Drive {
       surface.mu = s.GetDouble("mu_axle", surface.mu);
       surface.mu2 = s.GetDouble("mu_roll", surface.mu2);
     }
+    const ubersim::SurfaceMaterial grip = ctx.CarpetSurface(surface);
+    mu_axle_ = grip.mu;
+    mu_roll_ = grip.mu2 < 0 ? grip.mu : grip.mu2;
     if (wheel_radius_ * 2 <= body.ground_clearance) {
       throw ubersim::PluginError("wheel_radius " + std::to_string(wheel_radius_) +
                                  " m leaves the wheels above the carpet (ground_clearance " +
@@ -95,6 +101,7 @@ class OmniForceDrive final : public ubersim::Drive {
     ubersim::Body& chassis = ctx.Chassis();
     // The robot stands on the carpet at z = 0; the chassis origin (its centre of mass) is this high.
     const double chassis_z = chassis.GetPose().position.z();
+    rest_height_ = chassis_z - kSettle;
     const ubersim::ParamView list = p["wheels"];
     wheels_.resize(list.Size());
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
@@ -103,39 +110,6 @@ class OmniForceDrive final : public ubersim::Drive {
       const Vec3 radial(std::cos(angle), std::sin(angle), 0.0);
       w.tangent = Vec3(-std::sin(angle), std::cos(angle), 0.0);
       w.centre = radial * distance_ + Vec3(0, 0, wheel_radius_ - chassis_z);
-      w.mu_axle = surface.mu;
-      w.mu_roll = surface.mu2;
-      // The support: a sphere of the wheel's radius at its centre (kSettle higher: see there)
-      // touches the carpet at one point under the axle, as AddDrivenWheel's carpet contact does,
-      // so the robot stands as high as on wheels. It pokes out of the shell (0.079 + 0.029 m >
-      // 0.09 m on the modern robot), so it keeps only its carpet contacts; the ball, walls and
-      // robots meet the chassis shell, as they would meet the shell around real wheels.
-      ubersim::GeomSpec support;
-      support.name = "wheel" + std::to_string(i);
-      support.shape = ubersim::Shape::Sphere(wheel_radius_);
-      support.offset.position = w.centre + Vec3(0, 0, kSettle);
-      support.material = surface;
-      support.scope = ubersim::ContactScope::kPlanesOnly;
-      ubersim::Geom& geom = ctx.Node().AddGeom(support, &chassis);
-      ctx.ObserveContacts(geom, [this, i](const ubersim::Contact& c, ubersim::SurfaceMaterial& s, bool& accept) {
-        // Its scope lets only planes through; of those, the carpet (a wall could be a plane too).
-        if (c.other->GetShape().plane_normal.z() < 0.9) {
-          accept = false;
-          return;
-        }
-        // `s` is the wheel-carpet surface the omni drive's tyre would get (table pair or the two
-        // surfaces combined): its friction becomes the wheel's force limits…
-        Wheel& w = wheels_[i];
-        w.mu_axle = s.mu;
-        w.mu_roll = s.mu2 < 0 ? s.mu : s.mu2;
-        // …and the support itself carries the weight only: no friction, no bounce, no rolling
-        // resistance (the wheel forces are the robot's only grip on the carpet).
-        s.mu = 0.0;
-        s.mu2 = -1.0;
-        s.bounce = 0.0;
-        s.rolling_friction = 0.0;
-        s.slip = 0.0;
-      });
     }
     // Wheel speeds from the robot's velocity, and a least-squares inverse for odometry (as omni).
     Eigen::MatrixXd m(wheels_.size(), 3);
@@ -188,12 +162,10 @@ class OmniForceDrive final : public ubersim::Drive {
     servo_.Reset();
   }
 
-  // The servo loop's memory and each wheel's friction as its last contact resolved it (the next
-  // step's wheel forces are limited by it before this step's contacts exist).
+  // The servo loop's memory.
   std::string SaveState() const override {
     ubersim::StateWriter w(kStateLayout);
-    w.Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_).Int(static_cast<std::int64_t>(wheels_.size()));
-    for (const Wheel& wheel : wheels_) w.Double(wheel.mu_roll).Double(wheel.mu_axle);
+    w.Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_);
     return w.Take();
   }
 
@@ -202,14 +174,30 @@ class OmniForceDrive final : public ubersim::Drive {
     r.Watchdog(watchdog_);
     servo_.Set(r.Setpoint());
     command_ = r.Move();
-    if (r.Int() != static_cast<std::int64_t>(wheels_.size())) {
-      throw ubersim::PluginError("omni_force drive: saved state is of a robot with another number of wheels");
-    }
-    for (Wheel& wheel : wheels_) {
-      wheel.mu_roll = r.Double();
-      wheel.mu_axle = r.Double();
-    }
     r.Finish();
+  }
+
+  // Puts a robot that stands on its wheels back level at its resting height (see the top).
+  void PostStep(const ubersim::StepInfo&) override {
+    ubersim::Body& chassis = ctx_->Chassis();
+    const ubersim::Pose pose = chassis.GetPose();
+    const Vec3& p = pose.position;
+    if (p.z() > rest_height_ + kGripHeight) return;  // in the air: falling
+    ubersim::Twist twist = chassis.GetTwist();
+    const ubersim::Quat& q = pose.orientation;
+    // Level and still before the step, with its weight carried and pushed only in the plane, a
+    // robot nothing hit is level and still after it, exactly: most steps end here.
+    if (p.z() == rest_height_ && q.x() == 0.0 && q.y() == 0.0 && twist.linear.z() == 0.0 && twist.angular.x() == 0.0 &&
+        twist.angular.y() == 0.0) {
+      return;
+    }
+    // The turn about the vertical left of the orientation (its twist, dropping the tilt).
+    ubersim::Quat yaw(q.w(), 0.0, 0.0, q.z());
+    if (yaw.norm() < 1e-9) yaw = ubersim::Quat(0.0, 0.0, 0.0, 1.0);  // upside down: any heading
+    chassis.SetPose(ubersim::Pose{Vec3(p.x(), p.y(), rest_height_), yaw.normalized()});
+    twist.linear.z() = 0.0;
+    twist.angular.x() = twist.angular.y() = 0.0;
+    chassis.SetTwist(twist);
   }
 
   void PreStep(const ubersim::StepInfo& step) override {
@@ -241,6 +229,17 @@ class OmniForceDrive final : public ubersim::Drive {
     Vec3 axle;      // unit, in the carpet plane, across the rolling direction
   };
 
+  // The robot's heading as a rotation of the carpet plane: robot frame (x, y) to world (x, y).
+  static Eigen::Matrix2d Heading(const ubersim::Quat& orientation) {
+    const Vec3 forward = orientation * Vec3::UnitX();
+    Eigen::Vector2d c = forward.head<2>();
+    const double length = c.norm();
+    c = length > 1e-9 ? Eigen::Vector2d(c / length) : Eigen::Vector2d(1.0, 0.0);  // pointing straight up: any
+    Eigen::Matrix2d r;
+    r << c.x(), -c.y(), c.y(), c.x();
+    return r;
+  }
+
   Frame WheelFrame(const Vec3& position, const Eigen::Matrix3d& rotation, const Wheel& w) const {
     const Vec3 up = Vec3::UnitZ();  // the carpet's normal
     Frame f;
@@ -252,43 +251,45 @@ class OmniForceDrive final : public ubersim::Drive {
     return f;
   }
 
-  // Each wheel's motor and rollers push the chassis at the wheel's contact point. At the carpet,
-  // not at the centre of mass: braking pitches the robot onto its front supports as a real one
-  // pitches onto its front wheels (the rigid supports hold it level to within 1 mrad; tests).
-  // The force that would reach the wheel's target in this step if it moved its share of the
-  // robot is a stiff proportional servo. Summed over the wheels it never overshoots in
-  // translation; in yaw the shares act at wheel_distance on a chassis with less moment of
-  // inertia than they would have there, so it overshoots by yaw_gain_ - 1 of the error each step
-  // (0.54 on the modern robot) and settles in a few steps (see Configure).
+  // Each wheel's motor and rollers push the chassis at the wheel's contact point, and the wheels
+  // together carry the robot's weight. The robot stands level (PostStep), so this is planar: the
+  // pushes' tilting moments are the carpet's to take, as the weight is. The force that would
+  // reach the wheel's target in this step if it moved its share of the robot is a stiff
+  // proportional servo. Summed over the wheels it never overshoots in translation; in yaw the
+  // shares act at wheel_distance on a chassis with less moment of inertia than they would have
+  // there, so it overshoots by yaw_gain_ - 1 of the error each step (0.54 on the modern robot)
+  // and settles in a few steps (see Configure).
   void PushWheels(const Eigen::VectorXd& targets, double dt) {
     ubersim::Body& chassis = ctx_->Chassis();
-    // One read of the chassis' state for all wheels; the wheels' forces are summed into one
-    // force and one torque about the centre of mass (the same as applying each at its point).
     const ubersim::Pose pose = chassis.GetPose();
+    if (pose.position.z() > rest_height_ + kGripHeight) return;  // in the air: no grip, no support
     const ubersim::Twist twist = chassis.GetTwist();
-    const Eigen::Matrix3d rotation = pose.orientation.toRotationMatrix();
+    const Eigen::Matrix2d heading = Heading(pose.orientation);
     const double n = static_cast<double>(wheels_.size());
     const double load = chassis.Mass() / n * ctx_->Gravity().norm();  // N: static, no load transfer
     const double share = chassis.Mass() / n * servo_scale_;            // kg each wheel moves
     const double motor_force = max_torque_ / wheel_radius_;     // N at the contact
-    Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+    const double drive_limit = std::min(motor_force, mu_roll_ * load);
+    const double roller_limit = mu_axle_ * load;
+    const Eigen::Vector2d velocity = twist.linear.head<2>();
+    const double spin = twist.angular.z();
+    Eigen::Vector2d force = Eigen::Vector2d::Zero();
+    double torque = 0.0;
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
       const Wheel& w = wheels_[i];
-      const Frame fr = WheelFrame(pose.position, rotation, w);
-      if (fr.contact.z() > kGripHeight) continue;  // a wheel in the air pushes nothing
-      const Vec3 arm = fr.contact - pose.position;
-      const Vec3 v = twist.linear + twist.angular.cross(arm);  // the chassis' velocity at the contact
+      const Eigen::Vector2d arm = heading * w.centre.head<2>();  // centre of mass to the contact, in the carpet plane
+      const Eigen::Vector2d rolling = heading * w.tangent.head<2>();
+      const Eigen::Vector2d axle(-rolling.y(), rolling.x());    // up × rolling
+      const Eigen::Vector2d v = velocity + spin * Eigen::Vector2d(-arm.y(), arm.x());  // at the contact
       const double surface_speed = targets(static_cast<Eigen::Index>(i)) * wheel_radius_;
-      const double drive_limit = std::min(motor_force, w.mu_roll * load);
-      const double drive = std::clamp(share * (surface_speed - v.dot(fr.rolling)) / dt, -drive_limit, drive_limit);
-      const double roller_limit = w.mu_axle * load;
-      const double roller = std::clamp(-share * v.dot(fr.axle) / dt, -roller_limit, roller_limit);
-      const Vec3 push = fr.rolling * drive + fr.axle * roller;
+      const double drive = std::clamp(share * (surface_speed - v.dot(rolling)) / dt, -drive_limit, drive_limit);
+      const double roller = std::clamp(-share * v.dot(axle) / dt, -roller_limit, roller_limit);
+      const Eigen::Vector2d push = rolling * drive + axle * roller;
       force += push;
-      torque += arm.cross(push);
+      torque += arm.x() * push.y() - arm.y() * push.x();
     }
-    chassis.AddForce(force);
-    chassis.AddTorque(torque);
+    chassis.AddForce(Vec3(force.x(), force.y(), 0.0) - chassis.Mass() * ctx_->Gravity());
+    chassis.AddTorque(Vec3(0.0, 0.0, torque));
   }
 
   // The command as (forward, left, angular) in the robot frame, within the speed limits.
@@ -313,7 +314,10 @@ class OmniForceDrive final : public ubersim::Drive {
   double distance_ = 0.08;
   double max_torque_ = 0.5;
   double max_wheel_speed_ = 150;
-  double servo_scale_ = 1.0;   // of each wheel's share of the mass in its servo force (<1: wheels far out)
+  double servo_scale_ = 1.0;
+  double mu_roll_ = 0.8;       // wheel-carpet friction along the rolling direction (the world's)
+  double mu_axle_ = 0.05;      // along the axle (the rollers)
+  double rest_height_ = 0.0;   // m, the centre of mass' height standing on the carpet   // of each wheel's share of the mass in its servo force (<1: wheels far out)
   ubersim::VelocityServo servo_;       // the (forward, left, angular) setpoint the wheels follow
   ubersim::CommandWatchdog watchdog_{0.1};
   ubersim::MoveCommand command_;

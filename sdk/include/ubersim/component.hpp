@@ -75,6 +75,9 @@ class UBERSIM_SDK_API RobotContext {
   virtual Vec3 Gravity() const = 0;
   /// Calls `handler` for every contact of `own` (one of this robot's geometries) while the robot lives.
   virtual void ObserveContacts(Geom& own, ContactHandler handler) = 0;
+  /// The surface a contact of `own` with the carpet gets (the world's material pair, else the
+  /// two combined): for parts that compute their carpet forces themselves instead of touching it.
+  virtual SurfaceMaterial CarpetSurface(const SurfaceMaterial& own) const = 0;
 };
 
 /// Base of robot parts (drive, dribbler, kicker). The kernel calls Configure once, then each step
