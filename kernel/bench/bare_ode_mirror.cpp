@@ -126,6 +126,13 @@ BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
   });
   ball_ = body_of.at(world.ball().id());
   for (const OdeBody& b : bodies_) body_ids_.push_back(b.get());
+  for (const auto& [kernel, copy] : body_of) {
+    if (kernel != world.ball().id() && dBodyGetNumJoints(kernel) == 0) free_.push_back(Twin{kernel, copy});
+  }
+  // Scene order, not the map's (pointer) order: the same copy on every run.
+  std::sort(free_.begin(), free_.end(), [&](const Twin& a, const Twin& b) {
+    return std::find(body_ids_.begin(), body_ids_.end(), a.copy) < std::find(body_ids_.begin(), body_ids_.end(), b.copy);
+  });
   ball_ids_.assign(1, ball_);
   kernel_ball_ = world.ball().id();
 
@@ -310,6 +317,62 @@ void BareOdeMirror::FollowBall() {
   dBodySetLinearVel(ball_, v[0], v[1], v[2]);
   const dReal* w = dBodyGetAngularVel(kernel_ball_);
   dBodySetAngularVel(ball_, w[0], w[1], w[2]);
+}
+
+BareOdeMirror::BodyState BareOdeMirror::Read(dBodyID b) {
+  BodyState s;
+  const dReal* p = dBodyGetPosition(b);
+  const dReal* q = dBodyGetQuaternion(b);
+  const dReal* v = dBodyGetLinearVel(b);
+  const dReal* w = dBodyGetAngularVel(b);
+  std::copy(p, p + 3, s.begin());
+  std::copy(q, q + 4, s.begin() + 3);
+  std::copy(v, v + 3, s.begin() + 7);
+  std::copy(w, w + 3, s.begin() + 10);
+  return s;
+}
+
+void BareOdeMirror::Write(dBodyID b, const BodyState& s) {
+  dBodySetPosition(b, s[0], s[1], s[2]);
+  dBodySetQuaternion(b, &s[3]);
+  dBodySetLinearVel(b, s[7], s[8], s[9]);
+  dBodySetAngularVel(b, s[10], s[11], s[12]);
+}
+
+void BareOdeMirror::FollowFreeBodies() {
+  for (const Twin& t : free_) Write(t.copy, Read(t.kernel));
+}
+
+void BareOdeMirror::Record(bool ball_moved) {
+  for (const Motor& m : motors_) {
+    motor_log_.push_back(dJointGetHingeParam(m.kernel, dParamVel));
+    motor_log_.push_back(dJointGetHingeParam(m.kernel, dParamFMax));
+  }
+  for (const Twin& t : free_) body_log_.push_back(Read(t.kernel));
+  ball_moved_log_.push_back(ball_moved ? 1 : 0);
+  if (ball_moved) body_log_.push_back(Read(kernel_ball_));
+  ++recorded_;
+}
+
+std::chrono::steady_clock::duration BareOdeMirror::StepRecorded() {
+  std::chrono::steady_clock::duration stepping{};
+  std::size_t motor = 0, body = 0;
+  for (std::size_t step = 0; step < recorded_; ++step) {
+    for (const Motor& m : motors_) {
+      dJointSetHingeParam(m.copy, dParamVel, motor_log_[motor++]);
+      dJointSetHingeParam(m.copy, dParamFMax, motor_log_[motor++]);
+    }
+    for (const Twin& t : free_) Write(t.copy, body_log_[body++]);
+    if (ball_moved_log_[step]) Write(ball_, body_log_[body++]);
+    const auto t0 = std::chrono::steady_clock::now();
+    Step();
+    stepping += std::chrono::steady_clock::now() - t0;
+  }
+  recorded_ = 0;
+  motor_log_.clear();
+  body_log_.clear();
+  ball_moved_log_.clear();
+  return stepping;
 }
 
 void BareOdeMirror::Step() {

@@ -5,6 +5,9 @@
 // difference between the two.
 #pragma once
 
+#include <array>
+#include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -31,8 +34,22 @@ class BareOdeMirror {
   void FollowMotors();
   /// Puts the ball where the kernel's is, at its velocity (after the random play moved it).
   void FollowBall();
+  /// Puts every body no joint holds (a one-body robot, whose drive plugin pushes and holds it
+  /// with forces the copy does not have) where its twin in the kernel is, at its velocity.
+  void FollowFreeBodies();
   /// One step: collide, QuickStep, clear contacts.
   void Step();
+
+  /// Records what the three Follow calls would copy now, for a later StepRecorded: the kernel
+  /// and the baseline then each run a stretch of steps alone, neither evicting the other's data
+  /// from the processor's caches every step (measured together, each step of one ran on the
+  /// other's leftovers, which cost the kernel 15 % of its speed).
+  void Record(bool ball_moved);
+  /// Steps recorded so far and not yet stepped.
+  std::size_t recorded() const { return recorded_; }
+  /// Steps once per recorded step, each following what was recorded for it; forgets them.
+  /// Returns the time the steps took (the following not counted).
+  std::chrono::steady_clock::duration StepRecorded();
 
   /// Bodies, geometries, joints copied.
   int bodies() const { return static_cast<int>(bodies_.size()); }
@@ -51,6 +68,14 @@ class BareOdeMirror {
     dJointID kernel;  // the joint in the kernel world
     dJointID copy;    // its copy here
   };
+  struct Twin {
+    dBodyID kernel;  // a body in the kernel world
+    dBodyID copy;    // its copy here
+  };
+  // One body's state as Record keeps it: position, quaternion, linear and angular velocity.
+  using BodyState = std::array<dReal, 13>;
+  static BodyState Read(dBodyID b);
+  static void Write(dBodyID b, const BodyState& s);
   static void NearCallback(void* data, dGeomID a, dGeomID b);
   void Collide(dGeomID a, dGeomID b);
 
@@ -62,6 +87,13 @@ class BareOdeMirror {
   std::vector<OdeGeom> geoms_;
   std::vector<OdeJoint> joints_;
   std::vector<Motor> motors_;
+  std::vector<Twin> free_;                // bodies no joint holds, the ball excepted
+  // Recorded steps, one after the other: each step's motors (speed, torque), free bodies and
+  // whether the ball moved, then the ball's state where it did.
+  std::size_t recorded_ = 0;
+  std::vector<dReal> motor_log_;
+  std::vector<BodyState> body_log_;
+  std::vector<char> ball_moved_log_;
   IslandStepper islands_;                 // the kernel's iterations per island, in plain ODE calls
   std::vector<dBodyID> body_ids_, ball_ids_;
   dBodyID ball_ = nullptr;
