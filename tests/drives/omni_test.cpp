@@ -11,6 +11,7 @@
 
 #include "omni_world.hpp"
 #include "ubersim/kernel/scene_graph.hpp"
+#include "ubersim/wheel.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -119,6 +120,44 @@ TEST(OmniDrive, TheRotorAddsInertiaAboutTheAxleOnly) {
   EXPECT_NEAR(m.I[2 * 4 + 2], 0.5 * mass * r * r + rotor, 1e-12);
   EXPECT_NEAR(m.I[0], mass * (3 * r * r + width * width) / 12, 1e-12);
   EXPECT_NEAR(m.I[1 * 4 + 1], mass * (3 * r * r + width * width) / 12, 1e-12);
+}
+
+// The modern robot's wheels lie inside its shell (outer rim 88.9 mm from the centre, the shell
+// 90 mm; the front wheels' rims 67 mm forward, the flat front 70 mm) and the shell comes down to
+// 15 mm, below a resting ball's centre: nothing but the carpet reaches them, so they carry no
+// tyre geometry, only their carpet contact.
+TEST(OmniDrive, TheShellShieldsTheWheelsFromAllButTheCarpet) {
+  OmniWorld w;
+  for (int i = 0; i < 4; ++i) {
+    const NodeImpl* wheel = w.world->scene().Find("blue/0/wheel" + std::to_string(i));
+    ASSERT_NE(wheel, nullptr);
+    EXPECT_EQ(wheel->FindGeom("tyre"), nullptr) << "wheel " << i;
+    EXPECT_NE(wheel->FindGeom("carpet_contact"), nullptr) << "wheel " << i;
+  }
+  RobotBodyInfo body;
+  body.radius = 0.09;
+  body.front_distance = 0.07;
+  body.ground_clearance = 0.015;
+  const double ball = 0.0215;
+  auto wheel_at = [](double angle_deg, double distance) {
+    const double a = angle_deg * M_PI / 180;
+    WheelSpec spec;
+    spec.centre = Vec3(std::cos(a), std::sin(a), 0) * distance + Vec3(0, 0, -0.021);
+    spec.axle = -Vec3(std::cos(a), std::sin(a), 0);
+    spec.radius = 0.029;
+    spec.width = 0.01;
+    return spec;
+  };
+  EXPECT_TRUE(ShellShieldsWheel(body, ball, wheel_at(135, 0.079)));
+  EXPECT_TRUE(ShellShieldsWheel(body, ball, wheel_at(60, 0.079)));
+  EXPECT_FALSE(ShellShieldsWheel(body, ball, wheel_at(135, 0.080)));  // rim 0.2 mm from the shell
+  EXPECT_FALSE(ShellShieldsWheel(body, ball, wheel_at(45, 0.079)));   // rim past the flat front
+  RobotBodyInfo high = body;
+  high.ground_clearance = 0.025;  // a ball could roll under the shell
+  EXPECT_FALSE(ShellShieldsWheel(high, ball, wheel_at(135, 0.079)));
+  WheelSpec tilted = wheel_at(135, 0.079);
+  tilted.axle = Vec3(1, 0, 1);  // not horizontal: the disc's extent is not worked out
+  EXPECT_FALSE(ShellShieldsWheel(body, ball, tilted));
 }
 
 }  // namespace

@@ -84,6 +84,7 @@ class OmniDrive final : public ubersim::Drive {
       spec.rollers_along_axle = true;  // mu along the axle (free rollers), mu2 across it
       spec.holding_torque = max_torque_;
       spec.rotor_inertia = rotor_inertia_;
+      spec.tyre_shielded = ubersim::ShellShieldsWheel(body, ctx.BallRadius(), spec);
       w.hinge = &ubersim::AddDrivenWheel(ctx, spec);
       wheels_.push_back(w);
     }

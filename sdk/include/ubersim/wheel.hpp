@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <cmath>
 #include <optional>
 #include <string>
 
@@ -25,7 +26,34 @@ struct WheelSpec {
   double holding_torque = 0.5;         ///< N·m the motor holds the wheel still with until commanded
   /// kg·m² the motor's rotor and gears add about the axle (rotor inertia × gear ratio²).
   double rotor_inertia = 0.0;
+  /// The chassis' shell keeps everything but the carpet off the wheel (ShellShieldsWheel): it
+  /// gets no tyre geometry, only its carpet contact (a third of a wheel robot's geometries).
+  bool tyre_shielded = false;
 };
+
+/// Whether the chassis' shell — `body.radius` round, cut flat at `body.front_distance`, from
+/// `body.ground_clearance` up — covers a wheel of `spec` from the ball, the walls and other
+/// robots. True when the wheel's axle is horizontal, its disc lies inside the shell's outline by
+/// at least `margin` (m: more than a ball resting against the shell sinks into it, the world's
+/// 0.5 mm contact layer), and the shell comes down lower than a resting ball's centre, so that a
+/// ball touching the shell never reaches under it (other robots touch only the shell). A shot
+/// sinks deeper for a step or two (6 mm at 6.5 m/s) before the shell pushes it out: a wheel
+/// inside the shell is no surface a real ball meets, so a tyre there only added contacts.
+inline bool ShellShieldsWheel(const RobotBodyInfo& body, double ball_radius, const WheelSpec& spec,
+                              double margin = 0.001) {
+  if (body.ground_clearance >= ball_radius) return false;
+  const Vec3 axle = spec.axle.normalized();
+  if (std::abs(axle.z()) > 1e-9) return false;
+  const Vec3 along = Vec3::UnitZ().cross(axle);  // the disc's horizontal extent
+  for (double s : {-1.0, 1.0}) {
+    for (double t : {-1.0, 1.0}) {
+      const Vec3 corner = spec.centre + along * (s * spec.radius) + axle * (t * 0.5 * spec.width);
+      if (std::hypot(corner.x(), corner.y()) > body.radius - margin) return false;
+      if (corner.x() > body.front_distance - margin) return false;
+    }
+  }
+  return true;
+}
 
 /// Builds a wheel body on a motorised hinge to the chassis and returns the hinge (drive it with
 /// SetMotor). The carpet touches the wheel at one point under its centre — a sphere of the
@@ -54,7 +82,7 @@ inline Joint& AddDrivenWheel(RobotContext& ctx, const WheelSpec& spec) {
   tyre.material = spec.tyre;
   tyre.scope = ContactScope::kNoPlanes;
   if (spec.rollers_along_axle) tyre.friction_axis = Vec3::UnitZ();  // the cylinder's axis is the axle
-  node.AddGeom(tyre, &wheel);
+  if (!spec.tyre_shielded) node.AddGeom(tyre, &wheel);
   GeomSpec contact = tyre;
   contact.name = "carpet_contact";
   contact.shape = Shape::Sphere(spec.radius);
