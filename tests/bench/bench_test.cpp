@@ -50,7 +50,7 @@ TEST_F(BenchWorld, TheBaselineCopiesEveryBodyAndJointAndItsRobotsStandOnTheirWhe
   BareOdeMirror mirror(*world, 3);
   EXPECT_EQ(mirror.bodies(), bodies);
   EXPECT_EQ(mirror.joints(), joints);
-  EXPECT_GT(mirror.geoms(), bodies);  // wheels carry two each, plus the field
+  EXPECT_GT(mirror.geoms(), bodies);  // shells and dribbler bars on the chassis, plus the field
 
   // Driven by the kernel's motor commands for 2 s, every chassis stays at its height: it stands
   // on its wheels (the tyres' carpet spheres), not on the chassis or a tyre's rim; and each robot
