@@ -2,15 +2,22 @@
 // The diff drive on the paper's CMDragons 2003 differential robot: stands level; steady forward,
 // backward and turning speeds within 3 % of the command; an arc of radius v/ω; speed-up
 // following the 2 m/s² limit within 5 % without wheel slip; braking after the command timeout;
-// wheel-speed commands (2 accepted, 3 refused); sideways commands dropped with a warning.
+// wheel-speed commands (2 accepted, 3 refused); sideways commands dropped with a warning; the
+// motor's rotor inertia on the wheels' axles.
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <ode/ode.h>
+
 #include "diff_world.hpp"
+#include "ubersim/kernel/scene_graph.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -216,6 +223,36 @@ TEST(DiffDrive, GlobalCommandIsTurnedIntoTheRobotFrame) {
   EXPECT_LT(across.Robot().twist.linear.norm(), 0.02);
   EXPECT_NEAR(across.Robot().pose.position.x(), 0.0, 0.01);
   EXPECT_GE(Count(across.text.str(), "cannot move sideways"), 1) << across.text.str();
+}
+
+// The motor's rotor turns with the wheel through its gears: `motor.rotor_inertia` adds to each
+// wheel's inertia about its axle and nothing to its mass, as on the omni drive.
+TEST(DiffDrive, TheRotorAddsInertiaAboutTheAxleOnly) {
+  std::ifstream in(kDiffRobot);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::string motor = "  motor:\n";
+  const std::size_t at = yaml.find(motor);
+  ASSERT_NE(at, std::string::npos);
+  const double rotor = 2.0e-5;
+  yaml.insert(at + motor.size(), "    rotor_inertia: 2.0e-5\n");
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / "ubersim-diff-rotor-test.yaml";
+  std::ofstream(file) << yaml;
+  DiffWorld w(-3.0, 0.0, 0.0, file.string());
+  std::filesystem::remove(file);
+  const double r = kWheelRadius, width = 0.012, mass = 0.05;  // models/robots/cmdragons-2003-diff.yaml
+  int wheels = 0;
+  w.world->scene().Root().ForEachBody([&](BodyImpl& b) {
+    if (b.Name() != "wheel") return;
+    ++wheels;
+    dMass m;
+    dBodyGetMass(b.id(), &m);
+    EXPECT_DOUBLE_EQ(m.mass, mass);
+    EXPECT_NEAR(m.I[2 * 4 + 2], 0.5 * mass * r * r + rotor, 1e-12);  // the cylinder's axis is the axle
+    EXPECT_NEAR(m.I[0], mass * (3 * r * r + width * width) / 12, 1e-12);
+  });
+  EXPECT_EQ(wheels, 2);
 }
 
 }  // namespace

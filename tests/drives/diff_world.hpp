@@ -22,7 +22,7 @@ struct DiffWorld {
   PluginRegistry registry{{UBERSIM_PLUGIN_BUILD_DIR}};
   std::unique_ptr<World> world;
 
-  explicit DiffWorld(double x = -3.0, double y = 0.0, double yaw = 0.0) {
+  explicit DiffWorld(double x = -3.0, double y = 0.0, double yaw = 0.0, const std::string& robot_file = kDiffRobot) {
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(),
                              [this](PluginKind k, const std::string& id) {
                                return registry.Find(k, id).schema_json;
@@ -31,7 +31,7 @@ struct DiffWorld {
     model.field = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml").field;
     model.radio = RadioModel{};  // ideal: commands take effect at once, none lost
     model.robots.clear();
-    model.robots.push_back(RobotPlacement{{Team::kBlue, 0}, loader.LoadRobot(kDiffRobot), x, y, yaw, true});
+    model.robots.push_back(RobotPlacement{{Team::kBlue, 0}, loader.LoadRobot(robot_file), x, y, yaw, true});
     model.ball_start = Vec3(3.5, 2.5, 0);  // out of the way
     world = std::make_unique<World>(model, registry, log, false);
   }
