@@ -6,8 +6,6 @@
 // motor's rotor inertia on the wheels' axles.
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -16,6 +14,7 @@
 
 #include <ode/ode.h>
 
+#include "../common/edited_model_file.hpp"
 #include "diff_world.hpp"
 #include "ubersim/kernel/scene_graph.hpp"
 
@@ -228,18 +227,10 @@ TEST(DiffDrive, GlobalCommandIsTurnedIntoTheRobotFrame) {
 // The motor's rotor turns with the wheel through its gears: `motor.rotor_inertia` adds to each
 // wheel's inertia about its axle and nothing to its mass, as on the omni drive.
 TEST(DiffDrive, TheRotorAddsInertiaAboutTheAxleOnly) {
-  std::ifstream in(kDiffRobot);
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  const std::string motor = "  motor:\n";
-  const std::size_t at = yaml.find(motor);
-  ASSERT_NE(at, std::string::npos);
   const double rotor = 2.0e-5;
-  yaml.insert(at + motor.size(), "    rotor_inertia: 2.0e-5\n");
-  const std::filesystem::path file = std::filesystem::temp_directory_path() / "ubersim-diff-rotor-test.yaml";
-  std::ofstream(file) << yaml;
-  DiffWorld w(-3.0, 0.0, 0.0, file.string());
+  const std::string file = testing::EditedModelFile(kDiffRobot, "  motor:\n", "  motor:\n    rotor_inertia: 2.0e-5\n",
+                                                    "ubersim-diff-rotor-robot");
+  DiffWorld w(-3.0, 0.0, 0.0, file);
   std::filesystem::remove(file);
   const double r = kWheelRadius, width = 0.012, mass = 0.05;  // models/robots/cmdragons-2003-diff.yaml
   int wheels = 0;

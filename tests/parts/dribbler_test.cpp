@@ -4,16 +4,11 @@
 // reports touching the ball, spins it backwards, and leaves the robot standing still.
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
-#include <stdexcept>
 #include <string>
-
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 
+#include "../common/edited_model_file.hpp"
 #include "parts_world.hpp"
 
 namespace ubersim::kernel {
@@ -47,20 +42,8 @@ class RollerDribbler : public ::testing::TestWithParam<BarModel> {
 
 // The modern robot file with its bar on a hinge, written once per test process.
 std::string HingeBarRobot() {
-  static const std::string file = [] {
-    std::ifstream in(kModernRobot);
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string yaml = text.str();
-    const std::string from = "bar_model: surface";
-    const std::size_t at = yaml.find(from);
-    if (at == std::string::npos) throw std::runtime_error("no bar_model in the modern robot file");
-    yaml.replace(at, from.size(), "bar_model: hinge");
-    const std::filesystem::path out = std::filesystem::temp_directory_path() /
-                                      ("ubersim-hinge-bar-robot-" + std::to_string(::getpid()) + ".yaml");
-    std::ofstream(out) << yaml;
-    return out.string();
-  }();
+  static const std::string file =
+      testing::EditedModelFile(kModernRobot, "bar_model: surface", "bar_model: hinge", "ubersim-hinge-bar-robot");
   return file;
 }
 
