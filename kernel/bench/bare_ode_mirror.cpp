@@ -303,22 +303,6 @@ void BareOdeMirror::Collide(dGeomID a, dGeomID b) {
   }
 }
 
-void BareOdeMirror::FollowMotors() {
-  for (const Motor& m : motors_) {
-    dJointSetHingeParam(m.copy, dParamVel, dJointGetHingeParam(m.kernel, dParamVel));
-    dJointSetHingeParam(m.copy, dParamFMax, dJointGetHingeParam(m.kernel, dParamFMax));
-  }
-}
-
-void BareOdeMirror::FollowBall() {
-  const dReal* p = dBodyGetPosition(kernel_ball_);
-  dBodySetPosition(ball_, p[0], p[1], p[2]);
-  const dReal* v = dBodyGetLinearVel(kernel_ball_);
-  dBodySetLinearVel(ball_, v[0], v[1], v[2]);
-  const dReal* w = dBodyGetAngularVel(kernel_ball_);
-  dBodySetAngularVel(ball_, w[0], w[1], w[2]);
-}
-
 BareOdeMirror::BodyState BareOdeMirror::Read(dBodyID b) {
   BodyState s;
   const dReal* p = dBodyGetPosition(b);
@@ -337,10 +321,6 @@ void BareOdeMirror::Write(dBodyID b, const BodyState& s) {
   dBodySetQuaternion(b, &s[3]);
   dBodySetLinearVel(b, s[7], s[8], s[9]);
   dBodySetAngularVel(b, s[10], s[11], s[12]);
-}
-
-void BareOdeMirror::FollowFreeBodies() {
-  for (const Twin& t : free_) Write(t.copy, Read(t.kernel));
 }
 
 void BareOdeMirror::Record(bool ball_moved) {

@@ -29,26 +29,19 @@ class BareOdeMirror {
   BareOdeMirror(const BareOdeMirror&) = delete;
   BareOdeMirror& operator=(const BareOdeMirror&) = delete;
 
-  /// Gives every motor the speed and torque its twin in `world` has now (the kernel's drive
-  /// plugins set them), so both worlds drive the same way; not part of the timed step.
-  void FollowMotors();
-  /// Puts the ball where the kernel's is, at its velocity (after the random play moved it).
-  void FollowBall();
-  /// Puts every body no joint holds (a one-body robot, whose drive plugin pushes and holds it
-  /// with forces the copy does not have) where its twin in the kernel is, at its velocity.
-  void FollowFreeBodies();
-  /// One step: collide, QuickStep, clear contacts.
-  void Step();
-
-  /// Records what the three Follow calls would copy now, for a later StepRecorded: the kernel
-  /// and the baseline then each run a stretch of steps alone, neither evicting the other's data
-  /// from the processor's caches every step (measured together, each step of one ran on the
-  /// other's leftovers, which cost the kernel 15 % of its speed).
+  /// Records what the kernel's step just set, for the baseline's next step to follow: every
+  /// motor's speed and torque (the kernel's drive plugins set them), every body no joint holds
+  /// where its twin in the kernel is, at its velocity (a one-body robot, whose drive plugin
+  /// pushes and holds it with forces the copy does not have), and the ball when the random play
+  /// moved it. Recorded, not copied at once: the kernel and the baseline then each run a stretch
+  /// of steps alone, neither evicting the other's data from the processor's caches every step
+  /// (measured together, each step of one ran on the other's leftovers, which cost the kernel
+  /// 15 % of its speed).
   void Record(bool ball_moved);
   /// Steps recorded so far and not yet stepped.
   std::size_t recorded() const { return recorded_; }
-  /// Steps once per recorded step, each following what was recorded for it; forgets them.
-  /// Returns the time the steps took (the following not counted).
+  /// Steps once per recorded step (collide, QuickStep, clear contacts), each following what was
+  /// recorded for it; forgets them. Returns the time the steps took (the following not counted).
   std::chrono::steady_clock::duration StepRecorded();
 
   /// Bodies, geometries, joints copied.
@@ -78,6 +71,7 @@ class BareOdeMirror {
   static void Write(dBodyID b, const BodyState& s);
   static void NearCallback(void* data, dGeomID a, dGeomID b);
   void Collide(dGeomID a, dGeomID b);
+  void Step();
 
   OdeLibrary ode_;
   OdeWorld world_;

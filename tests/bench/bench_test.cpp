@@ -59,9 +59,8 @@ TEST_F(BenchWorld, TheBaselineCopiesEveryBodyAndJointAndItsRobotsStandOnTheirWhe
   for (int i = 0; i < 2000; ++i) {
     const bool ball_moved = play.BeforeStep();
     world->Step();
-    mirror.FollowMotors();
-    if (ball_moved) mirror.FollowBall();
-    mirror.Step();
+    mirror.Record(ball_moved);
+    mirror.StepRecorded();
   }
   double moved = 0, apart = 0;
   for (const auto& [index, z] : chassis) {
@@ -96,10 +95,8 @@ TEST_F(BenchWorld, TheBaselineStepsTheSameInStretchesAsInLockstepAndItsOneBodyRo
   for (int i = 0; i < steps; ++i) {
     const bool ball_moved = play.BeforeStep();
     world.Step();
-    lockstep.FollowMotors();
-    lockstep.FollowFreeBodies();
-    if (ball_moved) lockstep.FollowBall();
-    lockstep.Step();
+    lockstep.Record(ball_moved);  // a stretch of one step
+    lockstep.StepRecorded();
     stretches.Record(ball_moved);
     if (stretches.recorded() == 250) stretches.StepRecorded();
   }

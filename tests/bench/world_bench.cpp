@@ -4,6 +4,7 @@
 // viewer state message). Run them all: `cmake --build build --target run-benchmarks`.
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -33,13 +34,11 @@ struct PlayedWorld {
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(), [this](PluginKind k, const std::string& id) {
       return registry.Find(k, id).schema_json;
     });
-    WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/" + name + ".yaml");
+    const std::optional<std::string> robot_file =
+        robot.empty() ? std::nullopt : std::optional<std::string>(UBERSIM_SOURCE_DIR "/models/robots/" + robot);
+    WorldModel model =
+        bench::LoadTrialWorld(loader, UBERSIM_SOURCE_DIR "/models/worlds/" + name + ".yaml", physics, robot_file);
     model.transports.clear();
-    physics.ApplyTo(model.physics);
-    if (!robot.empty()) {
-      const auto swapped = loader.LoadRobot(UBERSIM_SOURCE_DIR "/models/robots/" + robot);
-      for (RobotPlacement& r : model.robots) r.model = swapped;
-    }
     world = std::make_unique<World>(model, registry, log, false);
     play = std::make_unique<bench::RandomPlay>(*world, 1);
     for (int i = 0; i < 200; ++i) Step();  // past the start, robots moving
