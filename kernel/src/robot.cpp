@@ -95,7 +95,7 @@ class Robot::Context final : public RobotContext {
     });
   }
   SurfaceMaterial CarpetSurface(const SurfaceMaterial& own) const override {
-    return services_.materials ? services_.materials->Resolve(own, services_.carpet) : MaterialTable{}.Resolve(own, services_.carpet);
+    return services_.materials->Resolve(own, services_.carpet);
   }
   PrefixedLog& log() { return log_; }
 

@@ -24,7 +24,7 @@ struct RobotServices {
   const std::int64_t* sim_time_ns = nullptr;  ///< the world's clock
   FaultMonitor* faults = nullptr;              ///< where plugin faults are reported
   const LastGoodState* last_good = nullptr;    ///< what bodies a fault broke are put back to
-  const MaterialTable* materials = nullptr;    ///< the world's material pairs
+  const MaterialTable* materials = nullptr;    ///< the world's material pairs (set by the world)
   SurfaceMaterial carpet;                      ///< the carpet's surface
 };
 

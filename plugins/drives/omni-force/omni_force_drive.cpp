@@ -182,7 +182,7 @@ class OmniForceDrive final : public ubersim::Drive {
     ubersim::Body& chassis = ctx_->Chassis();
     const ubersim::Pose pose = chassis.GetPose();
     const Vec3& p = pose.position;
-    if (p.z() > rest_height_ + kGripHeight) return;  // in the air: falling
+    if (!Standing(p)) return;  // in the air: falling
     ubersim::Twist twist = chassis.GetTwist();
     const ubersim::Quat& q = pose.orientation;
     // Level and still before the step, with its weight carried and pushed only in the plane, a
@@ -229,6 +229,9 @@ class OmniForceDrive final : public ubersim::Drive {
     Vec3 axle;      // unit, in the carpet plane, across the rolling direction
   };
 
+  // Whether the robot stands on its wheels, its centre of mass at `position` (see kGripHeight).
+  bool Standing(const Vec3& position) const { return position.z() <= rest_height_ + kGripHeight; }
+
   // The robot's heading as a rotation of the carpet plane: robot frame (x, y) to world (x, y).
   static Eigen::Matrix2d Heading(const ubersim::Quat& orientation) {
     const Vec3 forward = orientation * Vec3::UnitX();
@@ -262,7 +265,7 @@ class OmniForceDrive final : public ubersim::Drive {
   void PushWheels(const Eigen::VectorXd& targets, double dt) {
     ubersim::Body& chassis = ctx_->Chassis();
     const ubersim::Pose pose = chassis.GetPose();
-    if (pose.position.z() > rest_height_ + kGripHeight) return;  // in the air: no grip, no support
+    if (!Standing(pose.position)) return;  // in the air: no grip, no support
     const ubersim::Twist twist = chassis.GetTwist();
     const Eigen::Matrix2d heading = Heading(pose.orientation);
     const double n = static_cast<double>(wheels_.size());
