@@ -187,6 +187,9 @@ struct JointSpec {
   Vec3 axis2 = Vec3::UnitY();    ///< universal joint second axis, world frame
   double lower_limit = -1e30;    ///< hinge rad / slider m; below -1e29 means none
   double upper_limit = 1e30;     ///< hinge rad / slider m; above 1e29 means none
+  /// Record the joint's torque (force) every step for Joint::LastTorque. Off unless asked: the
+  /// solver then does extra work for this joint each step.
+  bool measure_torque = false;
 };
 
 /// A joint in the scene, with an optional velocity motor along its first axis.
@@ -205,7 +208,8 @@ class UBERSIM_SDK_API Joint {
   virtual double Rate() const = 0;
   /// First axis, world frame.
   virtual Vec3 Axis() const = 0;
-  /// Torque (or force) the joint applied to its child in the last step, world frame.
+  /// Torque (or force) the joint applied to its child in the last step, world frame. Throws
+  /// PluginError unless the joint was created with JointSpec::measure_torque.
   virtual Vec3 LastTorque() const = 0;
 };
 

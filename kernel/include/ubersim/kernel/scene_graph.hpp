@@ -143,6 +143,7 @@ class JointImpl final : public Joint {
  private:
   std::string name_;
   JointKind kind_;
+  bool measure_torque_;
   dJointFeedback feedback_{};
   OdeJoint joint_;
 };
