@@ -226,10 +226,15 @@ GeomImpl::GeomImpl(NodeImpl& owner, const GeomSpec& spec, BodyImpl* body)
   if (body) {
     dGeomSetBody(g, body->id());
     const Pose& o = spec.offset;
-    dGeomSetOffsetPosition(g, o.position.x(), o.position.y(), o.position.z());
-    const dQuaternion q = {o.orientation.w(), o.orientation.x(), o.orientation.y(),
-                           o.orientation.z()};
-    dGeomSetOffsetQuaternion(g, q);
+    // A geometry without an offset uses its body's pose as it is; one with an offset, even an
+    // identity one, has ODE compose the two whenever the body moves (a wheel's carpet contact
+    // and its bounding box, every step).
+    if (o.position != Vec3::Zero() || o.orientation.coeffs() != Quat::Identity().coeffs()) {
+      dGeomSetOffsetPosition(g, o.position.x(), o.position.y(), o.position.z());
+      const dQuaternion q = {o.orientation.w(), o.orientation.x(), o.orientation.y(),
+                             o.orientation.z()};
+      dGeomSetOffsetQuaternion(g, q);
+    }
   } else if (s.kind != Shape::Kind::kPlane) {
     const Pose& o = spec.offset;
     dGeomSetPosition(g, o.position.x(), o.position.y(), o.position.z());

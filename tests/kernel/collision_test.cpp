@@ -483,3 +483,53 @@ TEST(CollisionManager, BroadphaseNamesRoundTrip) {
 
 }  // namespace
 }  // namespace ubersim::kernel
+
+namespace ubersim::kernel {
+namespace {
+
+// The kernel's own sphere-plane test must give dCollide's contact bit for bit, in both orders,
+// for tilted planes, spheres on bodies with and without an offset, touching or not.
+TEST(CollideSphereAndPlane, GivesDCollidesContactBitForBit) {
+  OdeLibrary ode;
+  OdeWorld world(dWorldCreate());
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int touching = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Vec3 n(u(rng), u(rng), u(rng));
+    if (n.norm() < 1e-3) continue;
+    n.normalize();
+    OdeGeom plane(dCreatePlane(nullptr, n.x(), n.y(), n.z(), 0.1 * u(rng)));
+    const double radius = 0.02 + 0.03 * (u(rng) + 1.0);
+    OdeGeom sphere(dCreateSphere(nullptr, radius));
+    OdeBody body(dBodyCreate(world.get()));
+    dBodySetPosition(body.get(), 0.1 * u(rng), 0.1 * u(rng), 0.1 * u(rng));
+    dGeomSetBody(sphere.get(), body.get());
+    if (trial % 2) dGeomSetOffsetPosition(sphere.get(), 0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng));
+    for (const bool sphere_first : {true, false}) {
+      const dGeomID first = sphere_first ? sphere.get() : plane.get();
+      const dGeomID second = sphere_first ? plane.get() : sphere.get();
+      dContactGeom expected{}, got{};
+      const int n_expected = dCollide(first, second, 1, &expected, sizeof(dContactGeom));
+      const int n_got = CollideSphereAndPlane(first, second, got);
+      ASSERT_EQ(n_got, n_expected) << "trial " << trial;
+      if (n_expected == 0) continue;
+      ++touching;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_EQ(got.pos[i], expected.pos[i]) << "trial " << trial;
+        EXPECT_EQ(got.normal[i], expected.normal[i]) << "trial " << trial;
+      }
+      EXPECT_EQ(got.depth, expected.depth);
+      EXPECT_EQ(got.g1, expected.g1);
+      EXPECT_EQ(got.g2, expected.g2);
+      EXPECT_EQ(got.side1, expected.side1);
+      EXPECT_EQ(got.side2, expected.side2);
+    }
+  }
+  // Both outcomes were tried, in numbers.
+  EXPECT_GT(touching, 400);
+  EXPECT_LT(touching, 3600);
+}
+
+}  // namespace
+}  // namespace ubersim::kernel

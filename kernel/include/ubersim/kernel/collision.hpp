@@ -36,6 +36,10 @@ inline constexpr int kContactCandidates = 64;
 /// farthest from those kept (ODE reports points in the order it finds them, often along one
 /// edge). Returns how many remain at the front of `contacts`.
 int SpreadContacts(std::vector<dContactGeom>& contacts, int found, int keep);
+
+/// The contact of a sphere and a plane, `first` and `second` in either order: bit for bit what
+/// dCollide(first, second) gives, without its dispatch. Returns 1 when they touch, else 0.
+int CollideSphereAndPlane(dGeomID first, dGeomID second, dContactGeom& contact);
 /// The model-file name of a broadphase.
 const char* ToString(Broadphase b);
 
@@ -71,7 +75,7 @@ class MaterialTable {
 /// Counters of the last Collide() call.
 struct CollisionStats {
   std::size_t sphere_tests = 0;    ///< bounding-sphere overlap tests (scene-graph broadphase)
-  std::size_t narrow_tests = 0;    ///< dCollide calls
+  std::size_t narrow_tests = 0;    ///< pairs whose contacts were computed (dCollide or an exact test of our own)
   std::size_t touching_pairs = 0;  ///< pairs with at least one contact
   std::size_t contacts = 0;        ///< contact joints created
   std::size_t swept_contacts = 0;  ///< of those, speculative contacts of fast balls
