@@ -187,9 +187,14 @@ void BodyWatch::Add(const BodyImpl& body) {
   for (const dReal* v : {dBodyGetLinearVel(id), dBodyGetForce(id), dBodyGetTorque(id)}) {
     vectors_.push_back(v);
   }
+  accumulations_ = &body.accumulations();
+  ever_checked_ = false;
 }
 
-bool BodyWatch::AllFinite() const {
+bool BodyWatch::AllFinite() {
+  if (!accumulations_) return true;  // nothing watched
+  const std::uint64_t accumulations = *accumulations_;
+  if (ever_checked_ && accumulations == checked_) return true;
   // Three sums, one per component: independent additions the processor overlaps.
   dReal x = 0, y = 0, z = 0;
   for (const dReal* v : vectors_) {
@@ -197,11 +202,14 @@ bool BodyWatch::AllFinite() const {
     y += v[1];
     z += v[2];
   }
-  if (std::isfinite(x + y + z)) return true;
-  for (const dReal* v : vectors_) {
-    if (!Finite(v, 3)) return false;
-  }
-  return true;  // finite values whose sum overflowed
+  if (!std::isfinite(x + y + z)) {
+    for (const dReal* v : vectors_) {
+      if (!Finite(v, 3)) return false;
+    }
+  }  // else finite values whose sum overflowed
+  checked_ = accumulations;
+  ever_checked_ = true;
+  return true;
 }
 
 std::string NonFiniteIn(const BodyImpl& body) {

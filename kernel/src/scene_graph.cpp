@@ -30,8 +30,8 @@ void RequireFinite(const Vec3& v, const char* what) {
 // ---------------------------------------------------------------------------------------------
 // BodyImpl
 
-BodyImpl::BodyImpl(dWorldID world, const BodySpec& spec)
-    : name_(spec.name), mass_(spec.mass.mass), body_(dBodyCreate(world)) {
+BodyImpl::BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumulations)
+    : name_(spec.name), mass_(spec.mass.mass), body_(dBodyCreate(world)), accumulations_(&accumulations) {
   const MassSpec& m = spec.mass;
   if (!(m.mass > 0.0) || !std::isfinite(m.mass)) {
     throw PluginError("body '" + spec.name + "': mass must be positive and finite");
@@ -87,22 +87,26 @@ Vec3 BodyImpl::PointVelocity(const Vec3& p) const {
 
 void BodyImpl::AddForce(const Vec3& f) {
   RequireFinite(f, "force");
+  ++*accumulations_;
   dBodyAddForce(body_.get(), f.x(), f.y(), f.z());
 }
 
 void BodyImpl::AddForceAtPoint(const Vec3& f, const Vec3& p) {
   RequireFinite(f, "force");
   RequireFinite(p, "force point");
+  ++*accumulations_;
   dBodyAddForceAtPos(body_.get(), f.x(), f.y(), f.z(), p.x(), p.y(), p.z());
 }
 
 void BodyImpl::AddTorque(const Vec3& t) {
   RequireFinite(t, "torque");
+  ++*accumulations_;
   dBodyAddTorque(body_.get(), t.x(), t.y(), t.z());
 }
 
 void BodyImpl::ApplyImpulse(const Vec3& impulse) {
   RequireFinite(impulse, "impulse");
+  ++*accumulations_;
   const Vec3 v = ToVec3(dBodyGetLinearVel(body_.get())) + impulse / mass_;
   dBodySetLinearVel(body_.get(), v.x(), v.y(), v.z());
   dBodyEnable(body_.get());
@@ -417,7 +421,7 @@ Body& NodeImpl::AddBody(const BodySpec& spec) {
   if (FindBody(spec.name)) {
     throw PluginError("scene node '" + Path() + "' already has a body '" + spec.name + "'");
   }
-  bodies_.push_back(std::make_unique<BodyImpl>(graph_.world(), spec));
+  bodies_.push_back(std::make_unique<BodyImpl>(graph_.world(), spec, graph_.body_accumulations()));
   return *bodies_.back();
 }
 

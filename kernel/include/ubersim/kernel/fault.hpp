@@ -109,18 +109,23 @@ class LastGoodState {
 };
 
 /// Watches bodies for what a plugin call can make non-finite through the SDK, which refuses
-/// non-finite arguments: a linear velocity or an accumulated force or torque that overflows. A
-/// check is nine additions per body (reading ODE's storage directly), cheap enough after every
-/// call.
+/// non-finite arguments: a linear velocity or an accumulated force or torque that overflows.
+/// Only the calls that add to those (BodyImpl::accumulations) can, so a check after a call when
+/// no body of the scene graph was added to reads one counter; else it is nine additions per
+/// watched body, reading ODE's storage directly.
 class BodyWatch {
  public:
-  /// Watches `body` too.
+  /// Watches `body` too (all watched bodies belong to one scene graph).
   void Add(const BodyImpl& body);
-  /// True when every watched value is finite.
-  bool AllFinite() const;
+  /// True when every watched value is finite (without looking, when nothing was added to any
+  /// body since a check that found them finite).
+  bool AllFinite();
 
  private:
   std::vector<const dReal*> vectors_;  // 3 values each
+  const std::uint64_t* accumulations_ = nullptr;  // the scene graph's counter
+  std::uint64_t checked_ = 0;                     // its value when last found finite
+  bool ever_checked_ = false;
 };
 
 /// The first non-finite value of a body (position, orientation, velocities, accumulated force

@@ -24,7 +24,7 @@ class SceneGraph;
 /// A rigid body owned by a node.
 class BodyImpl final : public Body {
  public:
-  BodyImpl(dWorldID world, const BodySpec& spec);
+  BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumulations);
   const std::string& Name() const override { return name_; }
   Pose GetPose() const override;
   void SetPose(const Pose& pose) override;
@@ -40,11 +40,16 @@ class BodyImpl final : public Body {
 
   /// The ODE body.
   dBodyID id() const { return body_.get(); }
+  /// How many calls, on any body of its scene graph, have added to a linear velocity, force or
+  /// torque: the only SDK writes whose result can be non-finite with finite arguments (an
+  /// overflowing sum). One counter for the graph, so a check reads one number.
+  const std::uint64_t& accumulations() const { return *accumulations_; }
 
  private:
   std::string name_;
   double mass_;
   OdeBody body_;
+  std::uint64_t* accumulations_;  // the scene graph's
 };
 
 /// A geometry owned by a node, with its surface, optional directional friction and observers.
@@ -229,9 +234,12 @@ class SceneGraph {
   /// Listener hooks (used by GeomImpl).
   void NotifyGeomAdded(GeomImpl& g) { if (on_geom_added_) on_geom_added_(g); }
   void NotifyGeomRemoved(GeomImpl& g) { if (on_geom_removed_) on_geom_removed_(g); }
+  /// The counter every body of the graph adds its accumulating calls to (BodyImpl::accumulations).
+  std::uint64_t& body_accumulations() { return body_accumulations_; }
 
  private:
   dWorldID world_;
+  std::uint64_t body_accumulations_ = 0;
   std::function<void(GeomImpl&)> on_geom_added_;
   std::function<void(GeomImpl&)> on_geom_removed_;
   std::unique_ptr<NodeImpl> root_;
