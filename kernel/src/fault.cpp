@@ -188,13 +188,13 @@ void BodyWatch::Add(const BodyImpl& body) {
     vectors_.push_back(v);
   }
   accumulations_ = &body.accumulations();
-  ever_checked_ = false;
+  checked_.reset();
 }
 
 bool BodyWatch::AllFinite() {
   if (!accumulations_) return true;  // nothing watched
   const std::uint64_t accumulations = *accumulations_;
-  if (ever_checked_ && accumulations == checked_) return true;
+  if (checked_ == accumulations) return true;
   // Three sums, one per component: independent additions the processor overlaps.
   dReal x = 0, y = 0, z = 0;
   for (const dReal* v : vectors_) {
@@ -208,7 +208,6 @@ bool BodyWatch::AllFinite() {
     }
   }  // else finite values whose sum overflowed
   checked_ = accumulations;
-  ever_checked_ = true;
   return true;
 }
 

@@ -124,8 +124,7 @@ class BodyWatch {
  private:
   std::vector<const dReal*> vectors_;  // 3 values each
   const std::uint64_t* accumulations_ = nullptr;  // the scene graph's counter
-  std::uint64_t checked_ = 0;                     // its value when last found finite
-  bool ever_checked_ = false;
+  std::optional<std::uint64_t> checked_;          // its value when last found finite
 };
 
 /// The first non-finite value of a body (position, orientation, velocities, accumulated force
