@@ -37,35 +37,42 @@ void IslandStepper::FindBallIslands(const std::vector<dBodyID>& balls) {
 
 void IslandStepper::Step(dWorldID world, const std::vector<dBodyID>& bodies, const std::vector<dBodyID>& balls,
                          double dt) {
-  if (ball_iterations_ == other_iterations_ || balls.empty()) {
-    dWorldSetQuickStepNumIterations(world, ball_iterations_);
-    dWorldQuickStep(world, dt);
+  dWorldGetGravity(world, gravity_);
+  split_ = ball_iterations_ != other_iterations_ && !balls.empty();
+  if (!split_) {
+    Pass(world, bodies, true, ball_iterations_, dt);
     return;
   }
+  // First the ball's islands, then the rest. Islands are disconnected, so QuickStep's search
+  // from the enabled bodies never reaches a paused one. QuickStep may enable a disabled body a
+  // ball's island reached, as one QuickStep would have: it stays enabled for the second pass,
+  // which it sits out.
   FindBallIslands(balls);
-  // First the ball's islands: every other body sits this pass out. Islands are disconnected, so
-  // QuickStep's search from the enabled bodies never reaches a paused one.
-  paused_.clear();
-  for (dBodyID b : bodies) {
-    if (dBodyIsEnabled(b) && !InBallIslands(b)) {
-      dBodyDisable(b);
-      paused_.push_back(b);
-    }
-  }
-  dWorldSetQuickStepNumIterations(world, ball_iterations_);
-  dWorldQuickStep(world, dt);
-  for (dBodyID b : paused_) dBodyEnable(b);
+  in_ball_islands_.resize(bodies.size());
+  for (std::size_t i = 0; i < bodies.size(); ++i) in_ball_islands_[i] = InBallIslands(bodies[i]);
+  Pass(world, bodies, true, ball_iterations_, dt);
+  Pass(world, bodies, false, other_iterations_, dt);
+}
 
-  // Then the rest, the ball's islands (stepped now) sitting out. QuickStep may have enabled a
-  // disabled body a ball's island reached, as one QuickStep would have: it stays enabled.
+void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, bool ball_pass, int iterations,
+                         double dt) {
   paused_.clear();
-  for (dBodyID b : ball_islands_) {
-    if (dBodyIsEnabled(b)) {
-      dBodyDisable(b);
+  bool solve = false;  // some enabled body of this pass is linked by a joint: QuickStep's work
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    dBodyID b = bodies[i];
+    if (!dBodyIsEnabled(b)) continue;
+    if (split_ && static_cast<bool>(in_ball_islands_[i]) != ball_pass) {
       paused_.push_back(b);
+    } else if (dBodyGetJoint(b, 0) == nullptr && IsLoneBody(b)) {  // the first test rejects most
+      lone_stepper_.Step(b, gravity_, dt);
+      paused_.push_back(b);  // stepped: QuickStep must not step it again
+    } else {
+      solve = true;
     }
   }
-  dWorldSetQuickStepNumIterations(world, other_iterations_);
+  if (!solve) return;
+  for (dBodyID b : paused_) dBodyDisable(b);
+  dWorldSetQuickStepNumIterations(world, iterations);
   dWorldQuickStep(world, dt);
   for (dBodyID b : paused_) dBodyEnable(b);
 }

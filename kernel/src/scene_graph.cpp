@@ -30,8 +30,12 @@ void RequireFinite(const Vec3& v, const char* what) {
 // ---------------------------------------------------------------------------------------------
 // BodyImpl
 
-BodyImpl::BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumulations)
-    : name_(spec.name), mass_(spec.mass.mass), body_(dBodyCreate(world)), accumulations_(&accumulations) {
+BodyImpl::BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumulations, std::uint64_t serial)
+    : name_(spec.name),
+      mass_(spec.mass.mass),
+      body_(dBodyCreate(world)),
+      accumulations_(&accumulations),
+      serial_(serial) {
   const MassSpec& m = spec.mass;
   if (!(m.mass > 0.0) || !std::isfinite(m.mass)) {
     throw PluginError("body '" + spec.name + "': mass must be positive and finite");
@@ -421,7 +425,7 @@ Body& NodeImpl::AddBody(const BodySpec& spec) {
   if (FindBody(spec.name)) {
     throw PluginError("scene node '" + Path() + "' already has a body '" + spec.name + "'");
   }
-  bodies_.push_back(std::make_unique<BodyImpl>(graph_.world(), spec, graph_.body_accumulations()));
+  bodies_.push_back(std::make_unique<BodyImpl>(graph_.world(), spec, graph_.body_accumulations(), graph_.NextBodySerial()));
   return *bodies_.back();
 }
 

@@ -187,6 +187,8 @@ void World::Build() {
   dWorldSetAutoDisableFlag(w, 0);  // a resting ball must react at once; also keeps runs exact
 
   scene_ = std::make_unique<SceneGraph>(w);
+  body_ids_.clear();  // the old scene's: listed again at the first step
+  body_ids_for_ = 0;
   collision_ = std::make_unique<CollisionManager>(*scene_, ParseBroadphase(ph.broadphase),
                                                   ph.max_contacts);
   for (const MaterialPair& p : model_.material_pairs) {
@@ -467,8 +469,15 @@ void World::Step() {
   t0 = SteadyClock::now();
   // ODE's QuickStep draws from one process-wide generator; each world keeps its own sequence.
   dRandSetSeed(ode_random_seed_);
-  body_ids_.clear();
-  scene_->Root().ForEachBody([this](BodyImpl& b) { body_ids_.push_back(b.id()); });
+  if (scene_->bodies_created() != body_ids_for_) {
+    // Newest first, ODE's own order: the lone bodies are then stepped in QuickStep's order.
+    std::vector<const BodyImpl*> by_age;
+    scene_->Root().ForEachBody([&by_age](BodyImpl& b) { by_age.push_back(&b); });
+    std::sort(by_age.begin(), by_age.end(), [](const BodyImpl* x, const BodyImpl* y) { return x->serial() > y->serial(); });
+    body_ids_.clear();
+    for (const BodyImpl* b : by_age) body_ids_.push_back(b->id());
+    body_ids_for_ = scene_->bodies_created();
+  }
   ball_ids_.assign(1, ball_->id());
   islands_.Step(world_.get(), body_ids_, ball_ids_, clock_.step_seconds());
   ode_random_seed_ = dRandGetSeed();

@@ -106,6 +106,56 @@ TEST(IslandStepper, EachIslandIsSteppedAsIfAloneWithItsOwnIterations) {
   EXPECT_GT(without_ball.Stretch(1.0), 5 * with_ball.Stretch(0.0));
 }
 
+// A free body: no joint, so it is its own island, stepped by the kernel (LoneBodyStepper).
+dBodyID FreeBody(dWorldID w, double x, double spin) {
+  dBodyID b = dBodyCreate(w);
+  dMass m;
+  dMassSetBoxTotal(&m, 2.5, 0.18, 0.15, 0.14);
+  dBodySetMass(b, &m);
+  dBodySetPosition(b, x, 3.0, 2.0);
+  dBodySetLinearVel(b, 1.0, -2.0, 0.5);
+  dBodySetAngularVel(b, 0.3, spin, 7.0);
+  return b;
+}
+
+TEST(IslandStepper, LoneBodiesAndALoneBallAreSteppedAsQuickStepWould) {
+  OdeLibrary ode;
+  // The chain is the only island QuickStep still solves; the ball is in flight (no contact) and
+  // three robots drive free: the first pass has nothing left for QuickStep.
+  OdeWorld both = MakeWorld();
+  Chain chain(both.get(), 1.0);
+  dBodyID ball = FreeBody(both.get(), -1.0, 40.0);
+  std::vector<dBodyID> robots;
+  for (int i = 0; i < 3; ++i) robots.push_back(FreeBody(both.get(), 1.0 + i, 2.0 * i));
+  std::vector<dBodyID> bodies = chain.links;
+  bodies.push_back(ball);
+  bodies.insert(bodies.end(), robots.begin(), robots.end());
+  IslandStepper stepper;
+  stepper.SetIterations(20, 1);
+
+  // The reference: QuickStep steps everything, the chain with the other islands' iterations.
+  OdeWorld ref = MakeWorld();
+  dWorldSetQuickStepNumIterations(ref.get(), 1);
+  Chain ref_chain(ref.get(), 1.0);
+  dBodyID ref_ball = FreeBody(ref.get(), -1.0, 40.0);
+  std::vector<dBodyID> ref_robots;
+  for (int i = 0; i < 3; ++i) ref_robots.push_back(FreeBody(ref.get(), 1.0 + i, 2.0 * i));
+
+  for (int i = 0; i < 200; ++i) {
+    dRandSetSeed(4321);
+    stepper.Step(both.get(), bodies, {ball}, kStep);
+    const unsigned long after_split = dRandGetSeed();
+    dRandSetSeed(4321);
+    dWorldQuickStep(ref.get(), kStep);
+    ASSERT_EQ(after_split, dRandGetSeed()) << "step " << i;
+    for (dBodyID b : bodies) ASSERT_TRUE(dBodyIsEnabled(b)) << "a paused body was left paused, step " << i;
+  }
+  ExpectSameState(chain.links, ref_chain.links);
+  ExpectSameState({ball}, {ref_ball});
+  ExpectSameState(robots, ref_robots);
+  EXPECT_LT(dBodyGetPosition(ball)[2], 1.0) << "the ball fell";
+}
+
 TEST(IslandStepper, EqualIterationsAreOneQuickStep) {
   OdeLibrary ode;
   OdeWorld a = MakeWorld(), b = MakeWorld();

@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
-// QuickStep with two iteration counts: one for the islands the ball belongs to, one for the rest.
+// QuickStep with two iteration counts: one for the islands the ball belongs to, one for the rest;
+// the bodies no joint touches stepped by the kernel.
 #pragma once
 
 #include <vector>
 
 #include <ode/ode.h>
+
+#include "ubersim/kernel/lone_body.hpp"
 
 namespace ubersim::kernel {
 
@@ -13,6 +16,10 @@ namespace ubersim::kernel {
 /// on its own; what needs many iterations is the 46 g ball pressed between a 2.5 kg robot's
 /// dribbler, its front and the carpet (the mass ratio slows the solver's convergence), while a
 /// robot driving on its own settles in a few. With equal counts it is exactly one QuickStep.
+///
+/// A body no joint touches (IsLoneBody: a one-body robot driving free, a ball in flight) is
+/// stepped by LoneBodyStepper, bit for bit as QuickStep would, and sits QuickStep out; a pass
+/// left with nothing else calls no QuickStep at all.
 class IslandStepper {
  public:
   /// QuickStep iterations for islands holding a ball, and for every other island (Step sets the
@@ -20,7 +27,10 @@ class IslandStepper {
   void SetIterations(int ball_islands, int other_islands);
 
   /// One physics step of `world` (whose every body is in `bodies`) by `dt` seconds; `balls` are
-  /// the balls' bodies. Bodies disabled before the step stay disabled.
+  /// the balls' bodies. Bodies disabled before the step stay disabled. Lone bodies are stepped
+  /// in the order of `bodies`: give them newest first, the order of ODE's own body list, for
+  /// their geometries to be told they moved in the order QuickStep tells them (the broadphase
+  /// lists moved geometries in that order).
   void Step(dWorldID world, const std::vector<dBodyID>& bodies, const std::vector<dBodyID>& balls, double dt);
 
  private:
@@ -28,10 +38,18 @@ class IslandStepper {
   // included), as QuickStep's own island search does.
   void FindBallIslands(const std::vector<dBodyID>& balls);
   bool InBallIslands(dBodyID b) const;
+  // Steps the enabled bodies of this pass (with two passes, the ball's islands when
+  // `ball_pass`, else the others; with one, all), the lone ones here and the rest with one
+  // QuickStep of `iterations`; every other body sits the pass out.
+  void Pass(dWorldID world, const std::vector<dBodyID>& bodies, bool ball_pass, int iterations, double dt);
 
   int ball_iterations_ = 20;
   int other_iterations_ = 20;
+  bool split_ = false;                 // this step has two passes
+  dVector3 gravity_ = {};              // the world's, read once a step
+  LoneBodyStepper lone_stepper_;
   std::vector<dBodyID> ball_islands_;  // scratch, reused each step
+  std::vector<char> in_ball_islands_;  // per body of Step's list: in ball_islands_
   std::vector<dBodyID> paused_;        // bodies disabled for one pass, to enable again
 };
 

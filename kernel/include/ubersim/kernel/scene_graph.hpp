@@ -24,7 +24,8 @@ class SceneGraph;
 /// A rigid body owned by a node.
 class BodyImpl final : public Body {
  public:
-  BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumulations);
+  /// `serial` orders bodies by creation (SceneGraph::NextBodySerial).
+  BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumulations, std::uint64_t serial);
   const std::string& Name() const override { return name_; }
   Pose GetPose() const override;
   void SetPose(const Pose& pose) override;
@@ -44,12 +45,16 @@ class BodyImpl final : public Body {
   /// torque: the only SDK writes whose result can be non-finite with finite arguments (an
   /// overflowing sum). One counter for the graph, so a check reads one number.
   const std::uint64_t& accumulations() const { return *accumulations_; }
+  /// Larger for a body created later. ODE lists a world's bodies newest first, and QuickStep
+  /// steps them in that order (IslandStepper::Step).
+  std::uint64_t serial() const { return serial_; }
 
  private:
   std::string name_;
   double mass_;
   OdeBody body_;
   std::uint64_t* accumulations_;  // the scene graph's
+  std::uint64_t serial_;
 };
 
 /// A geometry owned by a node, with its surface, optional directional friction and observers.
@@ -236,10 +241,15 @@ class SceneGraph {
   void NotifyGeomRemoved(GeomImpl& g) { if (on_geom_removed_) on_geom_removed_(g); }
   /// The counter every body of the graph adds its accumulating calls to (BodyImpl::accumulations).
   std::uint64_t& body_accumulations() { return body_accumulations_; }
+  /// A new body's serial (BodyImpl::serial): one more than the last.
+  std::uint64_t NextBodySerial() { return ++bodies_created_; }
+  /// Bodies created so far. A body lives as long as the graph: the same count, the same bodies.
+  std::uint64_t bodies_created() const { return bodies_created_; }
 
  private:
   dWorldID world_;
   std::uint64_t body_accumulations_ = 0;
+  std::uint64_t bodies_created_ = 0;
   std::function<void(GeomImpl&)> on_geom_added_;
   std::function<void(GeomImpl&)> on_geom_removed_;
   std::unique_ptr<NodeImpl> root_;
