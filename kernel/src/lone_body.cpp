@@ -63,7 +63,7 @@ void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
     dSetCrossMatrixMinus(tilde, momentum, 4);
     for (int i = 0; i < 12; ++i) tilde[i] = tilde[i] * dt + inertia[i];
     dScaleVector3(momentum, dRecip(dt));
-    dMatrix3 tilde_inverse;
+    dMatrix3 tilde_inverse = {};
     if (dInvertMatrix3(tilde_inverse, tilde) != 0) {
       dMultiply0_333(tilde, inertia, tilde_inverse);
       tilde[0] -= 1;

@@ -4,8 +4,10 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -177,27 +179,21 @@ TEST(IsLoneBody, LeavesToOdeWhatTheStepperDoesNotReproduce) {
   };
   EXPECT_TRUE(IsLoneBody(body()));
 
-  dBodyID jointed = body();
-  dJointAttach(dJointCreateBall(world.get(), nullptr), jointed, nullptr);
-  EXPECT_FALSE(IsLoneBody(jointed)) << "a joint (a contact too) makes it QuickStep's";
-  dBodyID disabled = body();
-  dBodyDisable(disabled);
-  EXPECT_FALSE(IsLoneBody(disabled)) << "QuickStep does not step it";
-  dBodyID kinematic = body();
-  dBodySetKinematic(kinematic);
-  EXPECT_FALSE(IsLoneBody(kinematic));
-  dBodyID finite = body();
-  dBodySetFiniteRotationMode(finite, 1);
-  EXPECT_FALSE(IsLoneBody(finite));
-  dBodyID damped = body();
-  dBodySetLinearDamping(damped, 0.01);
-  EXPECT_FALSE(IsLoneBody(damped));
-  dBodyID spin_damped = body();
-  dBodySetAngularDamping(spin_damped, 0.01);
-  EXPECT_FALSE(IsLoneBody(spin_damped));
-  dBodyID capped = body();
-  dBodySetMaxAngularSpeed(capped, 100);
-  EXPECT_FALSE(IsLoneBody(capped));
+  // Each case: what makes the body QuickStep's, set on a fresh body.
+  const std::vector<std::pair<const char*, std::function<void(dBodyID)>>> cases = {
+      {"a joint (a contact too)", [&](dBodyID b) { dJointAttach(dJointCreateBall(world.get(), nullptr), b, nullptr); }},
+      {"disabled (QuickStep does not step it)", [](dBodyID b) { dBodyDisable(b); }},
+      {"kinematic", [](dBodyID b) { dBodySetKinematic(b); }},
+      {"finite rotation", [](dBodyID b) { dBodySetFiniteRotationMode(b, 1); }},
+      {"linear damping", [](dBodyID b) { dBodySetLinearDamping(b, 0.01); }},
+      {"angular damping", [](dBodyID b) { dBodySetAngularDamping(b, 0.01); }},
+      {"a cap on the angular speed", [](dBodyID b) { dBodySetMaxAngularSpeed(b, 100); }},
+  };
+  for (const auto& [what, make] : cases) {
+    dBodyID b = body();
+    make(b);
+    EXPECT_FALSE(IsLoneBody(b)) << what;
+  }
 }
 
 }  // namespace
