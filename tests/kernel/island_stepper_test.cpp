@@ -3,6 +3,8 @@
 // stepped alone; bodies disabled before a step stay so.
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -15,6 +17,7 @@ namespace {
 
 using ubersim::kernel::IslandStepper;
 using ubersim::kernel::OdeLibrary;
+using ubersim::kernel::OdeSpace;
 using ubersim::kernel::OdeWorld;
 
 constexpr double kStep = 0.005;
@@ -154,6 +157,55 @@ TEST(IslandStepper, LoneBodiesAndALoneBallAreSteppedAsQuickStepWould) {
   ExpectSameState({ball}, {ref_ball});
   ExpectSameState(robots, ref_robots);
   EXPECT_LT(dBodyGetPosition(ball)[2], 1.0) << "the ball fell";
+}
+
+// The order of a space's geometries: the index each was given (dGeomSetData), front to back.
+std::vector<std::intptr_t> GeomOrder(dSpaceID space) {
+  std::vector<std::intptr_t> order;
+  for (int i = 0; i < dSpaceGetNumGeoms(space); ++i) {
+    order.push_back(reinterpret_cast<std::intptr_t>(dGeomGetData(dSpaceGetGeom(space, i))));
+  }
+  return order;
+}
+
+TEST(IslandStepper, GeometriesAreToldTheyMovedInQuickStepsOrder) {
+  OdeLibrary ode;
+  // Free bodies between linked pairs, each body with a sphere in a simple space, which puts a
+  // moved geometry at its front: the space's order afterwards is the order of the moves. The
+  // broadphase's lists, and so the order of contacts, depend on it.
+  struct Scene {
+    OdeWorld world = MakeWorld();
+    OdeSpace space{dSimpleSpaceCreate(nullptr)};
+    std::vector<dBodyID> bodies;  // newest first, as IslandStepper::Step wants them
+    Scene() {
+      std::vector<dBodyID> created;
+      for (int i = 0; i < 9; ++i) {
+        dBodyID b = FreeBody(world.get(), 0.5 * i, 0.1 * i);
+        dGeomID g = dCreateSphere(space.get(), 0.05);
+        dGeomSetBody(g, b);
+        dGeomSetData(g, reinterpret_cast<void*>(static_cast<std::intptr_t>(i)));
+        created.push_back(b);
+      }
+      // Bodies 1-2 and 5-7 linked: islands of QuickStep's; 0, 3, 4 and 8 free.
+      for (auto [a, b] : {std::pair{1, 2}, std::pair{5, 6}, std::pair{6, 7}}) {
+        dJointAttach(dJointCreateBall(world.get(), nullptr), created[a], created[b]);
+      }
+      bodies.assign(created.rbegin(), created.rend());
+      dSpaceClean(space.get());
+    }
+  };
+  Scene stepped, reference;
+  IslandStepper stepper;
+  stepper.SetIterations(5, 5);
+  dWorldSetQuickStepNumIterations(reference.world.get(), 5);
+  for (int i = 0; i < 3; ++i) {
+    stepper.Step(stepped.world.get(), stepped.bodies, {}, kStep);
+    dWorldQuickStep(reference.world.get(), kStep);
+    EXPECT_EQ(GeomOrder(stepped.space.get()), GeomOrder(reference.space.get())) << "step " << i;
+    dSpaceClean(stepped.space.get());
+    dSpaceClean(reference.space.get());
+  }
+  ExpectSameState(stepped.bodies, reference.bodies);
 }
 
 TEST(IslandStepper, EqualIterationsAreOneQuickStep) {

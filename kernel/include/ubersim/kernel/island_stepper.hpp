@@ -42,6 +42,11 @@ class IslandStepper {
   // `ball_pass`, else the others; with one, all), the lone ones here and the rest with one
   // QuickStep of `iterations`; every other body sits the pass out.
   void Pass(dWorldID world, const std::vector<dBodyID>& bodies, bool ball_pass, int iterations, double dt);
+  // Whether the index-th body of Step's list belongs to this pass.
+  bool InPass(std::size_t index, bool ball_pass) const;
+  // Tells the geometries of every body of the pass that it moved, in the order QuickStep would
+  // step them all (its island search), without moving any.
+  void TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, bool ball_pass);
 
   int ball_iterations_ = 20;
   int other_iterations_ = 20;
@@ -51,6 +56,9 @@ class IslandStepper {
   std::vector<dBodyID> ball_islands_;  // scratch, reused each step
   std::vector<char> in_ball_islands_;  // per body of Step's list: in ball_islands_
   std::vector<dBodyID> paused_;        // bodies disabled for one pass, to enable again
+  std::vector<dBodyID> lone_;          // this pass's lone bodies, in Step's order
+  std::vector<dBodyID> walk_;          // TouchInQuickStepOrder's stack
+  std::vector<dBodyID> reached_;       // and the bodies its walk has reached
 };
 
 }  // namespace ubersim::kernel
