@@ -4,6 +4,23 @@
 #include <algorithm>
 
 namespace ubersim::kernel {
+namespace {
+
+// Calls f(other) for each body `b` is linked to through an enabled joint, in the order of b's
+// joint list (QuickStep's island search follows the same links in the same order). A joint to
+// the static world links no body.
+template <typename F>
+void ForEachLinkedBody(dBodyID b, F&& f) {
+  for (int k = 0;; ++k) {
+    dJointID j = dBodyGetJoint(b, k);
+    if (!j) return;
+    if (!dJointIsEnabled(j)) continue;
+    dBodyID other = dJointGetBody(j, 0) == b ? dJointGetBody(j, 1) : dJointGetBody(j, 0);
+    if (other) f(other);
+  }
+}
+
+}  // namespace
 
 void IslandStepper::SetIterations(int ball_islands, int other_islands) {
   ball_iterations_ = std::max(1, ball_islands);
@@ -22,16 +39,9 @@ void IslandStepper::FindBallIslands(const std::vector<dBodyID>& balls) {
   }
   // Breadth first over the growing list: the same links QuickStep's island search follows.
   for (std::size_t next = 0; next < ball_islands_.size(); ++next) {
-    dBodyID b = ball_islands_[next];
-    const int joints = dBodyGetNumJoints(b);
-    for (int i = 0; i < joints; ++i) {
-      dJointID j = dBodyGetJoint(b, i);
-      if (!dJointIsEnabled(j)) continue;
-      for (int side = 0; side < 2; ++side) {
-        dBodyID other = dJointGetBody(j, side);
-        if (other && !InBallIslands(other)) ball_islands_.push_back(other);
-      }
-    }
+    ForEachLinkedBody(ball_islands_[next], [this](dBodyID other) {
+      if (!InBallIslands(other)) ball_islands_.push_back(other);
+    });
   }
 }
 
@@ -68,7 +78,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, boo
     if (!dBodyIsEnabled(b)) continue;
     if (!InPass(i, ball_pass)) {
       paused_.push_back(b);
-    } else if (dBodyGetJoint(b, 0) == nullptr && IsLoneBody(b)) {  // the first test rejects most
+    } else if (IsLoneBody(b)) {
       lone_.push_back(b);
     } else {
       ++solved;
@@ -118,13 +128,9 @@ void IslandStepper::TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, bo
     while (true) {
       const dReal* p = dBodyGetPosition(b);
       dBodySetPosition(b, p[0], p[1], p[2]);  // the same position: only its geometries are told
-      for (int k = 0;; ++k) {
-        dJointID j = dBodyGetJoint(b, k);
-        if (!j) break;
-        if (!dJointIsEnabled(j)) continue;
-        dBodyID other = dJointGetBody(j, 0) == b ? dJointGetBody(j, 1) : dJointGetBody(j, 0);
-        if (other && reach(other)) walk_.push_back(other);
-      }
+      ForEachLinkedBody(b, [&](dBodyID other) {
+        if (reach(other)) walk_.push_back(other);
+      });
       if (walk_.empty()) break;
       b = walk_.back();
       walk_.pop_back();
