@@ -125,11 +125,12 @@ BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
     body_of[b.id()] = bodies_.back().get();
   });
   ball_ = body_of.at(world.ball().id());
-  for (const OdeBody& b : bodies_) body_ids_.push_back(b.get());
+  // Newest first, as IslandStepper wants them: ODE's own list.
+  for (auto b = bodies_.rbegin(); b != bodies_.rend(); ++b) body_ids_.push_back(b->get());
   for (const auto& [kernel, copy] : body_of) {
     if (kernel != world.ball().id() && dBodyGetNumJoints(kernel) == 0) free_.push_back(Twin{kernel, copy});
   }
-  // Scene order, not the map's (pointer) order: the same copy on every run.
+  // The list's order, not the map's (pointer) order: the same copy on every run.
   std::sort(free_.begin(), free_.end(), [&](const Twin& a, const Twin& b) {
     return std::find(body_ids_.begin(), body_ids_.end(), a.copy) < std::find(body_ids_.begin(), body_ids_.end(), b.copy);
   });
@@ -241,6 +242,7 @@ BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
     for (const auto& child : node.children()) walk(*child);
   };
   walk(world.scene().Root());
+  limbs_ = FindLimbs(body_ids_);
   ode_seed_ = static_cast<unsigned long>(seed);
 }
 
@@ -359,7 +361,7 @@ void BareOdeMirror::Step() {
   last_contacts_ = 0;
   dSpaceCollide(space_.get(), this, &NearCallback);
   dRandSetSeed(ode_seed_);
-  islands_.Step(world_.get(), body_ids_, ball_ids_, step_);
+  islands_.Step(world_.get(), body_ids_, ball_ids_, step_, limbs_);
   ode_seed_ = dRandGetSeed();
   dJointGroupEmpty(contacts_.get());
 }

@@ -89,7 +89,8 @@ class BareOdeMirror {
   std::vector<BodyState> body_log_;
   std::vector<char> ball_moved_log_;
   IslandStepper islands_;                 // the kernel's iterations per island, in plain ODE calls
-  std::vector<dBodyID> body_ids_, ball_ids_;
+  std::vector<dBodyID> body_ids_, ball_ids_;  // bodies newest first
+  std::vector<char> limbs_;                   // per body of body_ids_: FindLimbs
   dBodyID ball_ = nullptr;
   dBodyID kernel_ball_ = nullptr;
   double step_ = 0.001;

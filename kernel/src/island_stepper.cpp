@@ -22,6 +22,24 @@ void ForEachLinkedBody(dBodyID b, F&& f) {
 
 }  // namespace
 
+std::vector<char> FindLimbs(const std::vector<dBodyID>& bodies) {
+  std::vector<char> limbs(bodies.size(), 0);
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    for (int k = 0;; ++k) {
+      dJointID j = dBodyGetJoint(bodies[i], k);
+      if (!j) break;
+      if (dJointGetType(j) == dJointTypeContact) continue;  // made and dropped every step
+      dBodyID other = dJointGetBody(j, 0) == bodies[i] ? dJointGetBody(j, 1) : dJointGetBody(j, 0);
+      // Newest first: a body created before this one comes after it.
+      if (other && std::find(bodies.begin() + i + 1, bodies.end(), other) != bodies.end()) {
+        limbs[i] = 1;
+        break;
+      }
+    }
+  }
+  return limbs;
+}
+
 void IslandStepper::SetIterations(int ball_islands, int other_islands) {
   ball_iterations_ = std::max(1, ball_islands);
   other_iterations_ = std::max(1, other_islands);
@@ -50,22 +68,24 @@ bool IslandStepper::InPass(std::size_t index, bool ball_pass) const {
 }
 
 void IslandStepper::Step(dWorldID world, const std::vector<dBodyID>& bodies, const std::vector<dBodyID>& balls,
-                         double dt) {
+                         double dt, const std::vector<char>& limbs) {
+  limbs_ = limbs.size() == bodies.size() ? &limbs : nullptr;
   dWorldGetGravity(world, gravity_);
   split_ = ball_iterations_ != other_iterations_ && !balls.empty();
   if (!split_) {
     Pass(world, bodies, true, ball_iterations_, dt);
-    return;
+  } else {
+    // First the ball's islands, then the rest. Islands are disconnected, so QuickStep's search
+    // from the enabled bodies never reaches a paused one. QuickStep may enable a disabled body a
+    // ball's island reached, as one QuickStep would have: it stays enabled for the second pass,
+    // which it sits out.
+    FindBallIslands(balls);
+    in_ball_islands_.resize(bodies.size());
+    for (std::size_t i = 0; i < bodies.size(); ++i) in_ball_islands_[i] = InBallIslands(bodies[i]);
+    Pass(world, bodies, true, ball_iterations_, dt);
+    Pass(world, bodies, false, other_iterations_, dt);
   }
-  // First the ball's islands, then the rest. Islands are disconnected, so QuickStep's search
-  // from the enabled bodies never reaches a paused one. QuickStep may enable a disabled body a
-  // ball's island reached, as one QuickStep would have: it stays enabled for the second pass,
-  // which it sits out.
-  FindBallIslands(balls);
-  in_ball_islands_.resize(bodies.size());
-  for (std::size_t i = 0; i < bodies.size(); ++i) in_ball_islands_[i] = InBallIslands(bodies[i]);
-  Pass(world, bodies, true, ball_iterations_, dt);
-  Pass(world, bodies, false, other_iterations_, dt);
+  limbs_ = nullptr;  // the caller's, valid for this call only
 }
 
 void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, bool ball_pass, int iterations,
@@ -103,9 +123,21 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, boo
   }
   if (solved == 0) return;
   for (dBodyID b : paused_) dBodyDisable(b);
+  // A disabled body starts no island, and the search enables every body it reaches through a
+  // joint: a disabled limb joins its island where the search meets it, after its root's joints.
+  held_.clear();
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    if (IsLimb(i) && dBodyIsEnabled(bodies[i]) && InPass(i, ball_pass)) held_.push_back(bodies[i]);
+  }
+  for (dBodyID b : held_) dBodyDisable(b);
   dWorldSetQuickStepNumIterations(world, iterations);
   dWorldQuickStep(world, dt);
   for (dBodyID b : paused_) dBodyEnable(b);
+  // Only a limb whose joints were taken away since FindLimbs is still disabled: it sat this step
+  // out, and is enabled for the next rather than left behind.
+  for (dBodyID b : held_) {
+    if (!dBodyIsEnabled(b)) dBodyEnable(b);
+  }
 }
 
 void IslandStepper::TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, bool ball_pass) {
@@ -123,7 +155,8 @@ void IslandStepper::TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, bo
   };
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     dBodyID b = bodies[i];
-    if (!dBodyIsEnabled(b) || !InPass(i, ball_pass) || !reach(b)) continue;
+    // A limb starts no island (Pass holds it back): its root's walk reaches it.
+    if (!dBodyIsEnabled(b) || !InPass(i, ball_pass) || IsLimb(i) || !reach(b)) continue;
     walk_.clear();
     while (true) {
       const dReal* p = dBodyGetPosition(b);

@@ -476,10 +476,11 @@ void World::Step() {
     std::sort(by_age.begin(), by_age.end(), [](const BodyImpl* x, const BodyImpl* y) { return x->serial() > y->serial(); });
     body_ids_.clear();
     for (const BodyImpl* b : by_age) body_ids_.push_back(b->id());
+    limbs_ = FindLimbs(body_ids_);  // the plugins add a robot's bodies and joints together
     body_ids_for_ = scene_->bodies_created();
   }
   ball_ids_.assign(1, ball_->id());
-  islands_.Step(world_.get(), body_ids_, ball_ids_, clock_.step_seconds());
+  islands_.Step(world_.get(), body_ids_, ball_ids_, clock_.step_seconds(), limbs_);
   ode_random_seed_ = dRandGetSeed();
   collision_->ClearContacts();
   timings_.physics_ns += ElapsedNs(t0);

@@ -155,6 +155,7 @@ class World {
   BodyImpl* ball_ = nullptr;
   IslandStepper islands_;
   std::vector<dBodyID> body_ids_, ball_ids_;  // the step's bodies for islands_, reused
+  std::vector<char> limbs_;                   // per body of body_ids_: FindLimbs
   std::uint64_t body_ids_for_ = 0;             // body_ids_ lists this many bodies created
   std::vector<std::unique_ptr<Robot>> robots_;
   std::vector<std::unique_ptr<TransportHost>> transports_;
