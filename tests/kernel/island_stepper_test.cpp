@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // IslandStepper: the ball's islands get their iterations, the others theirs, each exactly as if
-// stepped alone; bodies disabled before a step stay so.
+// stepped alone; bodies disabled before a step stay so; lone bodies as QuickStep steps them; a
+// robot's island searched from its chassis (limbs held back), so its wheels stay on the carpet.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>

@@ -11,21 +11,22 @@
 
 namespace ubersim::kernel {
 
-/// Steps an ODE world with QuickStep, giving the islands that hold the ball more solver iterations
-/// than the others. QuickStep already solves each island (bodies linked by joints and contacts)
-/// on its own; what needs many iterations is the 46 g ball pressed between a 2.5 kg robot's
-/// dribbler, its front and the carpet (the mass ratio slows the solver's convergence), while a
-/// robot driving on its own settles in a few. With equal counts it is exactly one QuickStep.
-///
-/// A body no joint touches (IsLoneBody: a one-body robot driving free, a ball in flight) is
-/// stepped by LoneBodyStepper, bit for bit as QuickStep would, and sits QuickStep out; a pass
-/// left with nothing else calls no QuickStep at all.
 /// Flags, per body of `bodies` (newest first), each body a joint other than a contact links to a
 /// body created before it: a robot's wheels and dribbler bar, which hang from its chassis, or a
 /// URDF link below its parent. Following such joints from any of them ends at a body not
 /// flagged, so an island search that starts only from those still reaches them all.
 std::vector<char> FindLimbs(const std::vector<dBodyID>& bodies);
 
+/// Steps an ODE world with QuickStep, giving the islands that hold the ball more solver iterations
+/// than the others. QuickStep already solves each island (bodies linked by joints and contacts)
+/// on its own; what needs many iterations is the 46 g ball pressed between a 2.5 kg robot's
+/// dribbler, its front and the carpet (the mass ratio slows the solver's convergence), while a
+/// robot driving on its own settles in a few. With equal counts and no limbs (Step) it is exactly
+/// one QuickStep.
+///
+/// A body no joint touches (IsLoneBody: a one-body robot driving free, a ball in flight) is
+/// stepped by LoneBodyStepper, bit for bit as QuickStep would, and sits QuickStep out; a pass
+/// left with nothing else calls no QuickStep at all.
 class IslandStepper {
  public:
   /// QuickStep iterations for islands holding a ball, and for every other island (Step sets the
