@@ -6,6 +6,11 @@
 namespace ubersim::kernel {
 namespace {
 
+// The body `j` links `b` to (null: the static world).
+dBodyID OtherBody(dJointID j, dBodyID b) {
+  return dJointGetBody(j, 0) == b ? dJointGetBody(j, 1) : dJointGetBody(j, 0);
+}
+
 // Calls f(other) for each body `b` is linked to through an enabled joint, in the order of b's
 // joint list (QuickStep's island search follows the same links in the same order). A joint to
 // the static world links no body.
@@ -15,8 +20,7 @@ void ForEachLinkedBody(dBodyID b, F&& f) {
     dJointID j = dBodyGetJoint(b, k);
     if (!j) return;
     if (!dJointIsEnabled(j)) continue;
-    dBodyID other = dJointGetBody(j, 0) == b ? dJointGetBody(j, 1) : dJointGetBody(j, 0);
-    if (other) f(other);
+    if (dBodyID other = OtherBody(j, b)) f(other);
   }
 }
 
@@ -29,7 +33,7 @@ std::vector<char> FindLimbs(const std::vector<dBodyID>& bodies) {
       dJointID j = dBodyGetJoint(bodies[i], k);
       if (!j) break;
       if (dJointGetType(j) == dJointTypeContact) continue;  // made and dropped every step
-      dBodyID other = dJointGetBody(j, 0) == bodies[i] ? dJointGetBody(j, 1) : dJointGetBody(j, 0);
+      dBodyID other = OtherBody(j, bodies[i]);
       // Newest first: a body created before this one comes after it.
       if (other && std::find(bodies.begin() + i + 1, bodies.end(), other) != bodies.end()) {
         limbs[i] = 1;
@@ -92,6 +96,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, boo
                          double dt) {
   paused_.clear();
   lone_.clear();
+  held_.clear();
   std::size_t solved = 0;  // enabled bodies of this pass linked by a joint: QuickStep's work
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     dBodyID b = bodies[i];
@@ -102,6 +107,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, boo
       lone_.push_back(b);
     } else {
       ++solved;
+      if (IsLimb(i)) held_.push_back(b);  // a limb has a joint: never lone
     }
   }
   if (solved > 0 && !lone_.empty()) {
@@ -125,10 +131,6 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, boo
   for (dBodyID b : paused_) dBodyDisable(b);
   // A disabled body starts no island, and the search enables every body it reaches through a
   // joint: a disabled limb joins its island where the search meets it, after its root's joints.
-  held_.clear();
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    if (IsLimb(i) && dBodyIsEnabled(bodies[i]) && InPass(i, ball_pass)) held_.push_back(bodies[i]);
-  }
   for (dBodyID b : held_) dBodyDisable(b);
   dWorldSetQuickStepNumIterations(world, iterations);
   dWorldQuickStep(world, dt);
