@@ -20,6 +20,7 @@ PACKAGES=(
   libprotobuf-dev protobuf-compiler
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-protobuf python3-yaml
+  iproute2
 )
 # The viewer's end-to-end test drives a real browser: Debian's Chromium through its chromedriver
 # and Selenium. Installed after the rest and not fatal: without them only that test is skipped.

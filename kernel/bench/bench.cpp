@@ -185,6 +185,7 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
   for (const auto& file : options.worlds) {
     WorldModel model = LoadTrialWorld(loader, file, options.physics, options.robot_model);
     if (!options.with_transports) model.transports.clear();  // headless: no sockets by default
+    model.local_only = true;  // a measurement sends to nobody else
 
     BenchResult r;
     r.world = model.name;

@@ -209,6 +209,7 @@ int RunCommand(const std::vector<std::string>& args) {
       ("duration", po::value<double>(&duration)->default_value(0), "stop after SECONDS of simulated time (0: run until stopped)")
       ("paused", "start paused")
       ("quiet,q", "no status line")
+      ("local-only", "keep every transport on loopback (127.0.0.1): nothing sent to or reachable from another machine")
       ("no-viewer", "do not start the browser viewer (the same as --no-transport viewer)")
       ("no-transport", po::value<std::vector<std::string>>(&skipped_transports), "do not start the world's transport ID (repeatable)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)")
@@ -249,6 +250,7 @@ int RunCommand(const std::vector<std::string>& args) {
     PluginRegistry registry(PluginSearchPath({world_file}, plugin_paths));
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(), LookupIn(registry));
     WorldModel model = loader.LoadWorld(world_file);
+    if (vm.count("local-only")) model.local_only = true;
     if (vm.count("no-viewer")) skipped_transports.push_back("viewer");
     for (const std::string& id : skipped_transports) {
       const auto removed = std::erase_if(model.transports, [&](const TransportModel& t) { return t.plugin == id; });

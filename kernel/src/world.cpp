@@ -65,6 +65,7 @@ class TransportHost final : public TransportContext {
     for (const CameraModel& c : world_.perception().cameras) out.push_back(CameraInfo{c.id, c.position});
     return out;
   }
+  bool LocalOnly() const override { return world_.model().local_only; }
 
   void Start(std::shared_ptr<Transport> t, std::string file) {
     transport_ = std::move(t);
@@ -112,6 +113,19 @@ class TransportHost final : public TransportContext {
   }
   std::string Endpoint() const {
     return plugin_ + (transport_ ? ": " + transport_->Endpoint() : std::string());
+  }
+  // Offers a setting: true when taken; a PluginError is the transport refusing the value (its
+  // message goes to `refusal`), anything else thrown is a fault.
+  bool OnSetting(const std::string& name, std::int64_t value, std::string& refusal) {
+    bool taken = false;
+    Guarded("OnSetting", [&](Transport& t) {
+      try {
+        taken = t.OnSetting(name, value);
+      } catch (const PluginError& e) {
+        refusal = plugin_ + ": " + e.what();
+      }
+    });
+    return taken;
   }
 
  private:
@@ -403,6 +417,35 @@ void World::Apply(const RealismEvent& e) {
   if (e.radio_loss) radio.loss = *e.radio_loss;
   radio_.Configure(radio);
   ++event_counters_.applied;
+}
+
+void World::Apply(const RobotSpecEvent& e) {
+  ++event_counters_.rejected;
+  if (e.reply) e.reply(EventAnswer{{"robot specs are not applied by this world"}, {}});
+}
+
+void World::Apply(const FieldEvent& e) {
+  ++event_counters_.rejected;
+  if (e.reply) e.reply(EventAnswer{{"the field cannot be changed while this world runs"}, {}});
+}
+
+void World::Apply(const TransportSettingEvent& e) {
+  EventAnswer answer;
+  bool taken = false;
+  for (auto& t : transports_) {
+    std::string refusal;
+    taken = t->OnSetting(e.name, e.value, refusal) || taken;
+    if (!refusal.empty()) answer.errors.push_back(refusal);
+  }
+  if (!taken && answer.errors.empty()) {
+    answer.errors.push_back("no transport of this world takes the setting '" + e.name + "'");
+  }
+  if (answer.errors.empty()) {
+    ++event_counters_.applied;
+  } else {
+    ++event_counters_.rejected;
+  }
+  if (e.reply) e.reply(answer);
 }
 
 void World::Apply(const ClockEvent& e) {

@@ -139,7 +139,7 @@ TEST(Cli, BatchRunsSeededWorldsOnWorkersAndChecksTheirHashesAgree) {
 }
 
 TEST(Cli, RunPrintsAStatusLineWithSimTimeAndRealTimeFactor) {
-  const Result r = RunUbersim("run " + kModels + "/worlds/ssl-2003.yaml --speed 4 --duration 3");
+  const Result r = RunUbersim("run " + kModels + "/worlds/ssl-2003.yaml --speed 4 --duration 3 --local-only");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("real-time factor"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("sim "), std::string::npos) << r.output;

@@ -111,16 +111,21 @@ class World:
 class Simulator:
     """`ubersim run WORLD` as a subprocess; stderr and stdout go to a log file (read with
     output()). Use as a context manager; the process is stopped with SIGINT, then killed after
-    `stop_timeout` s."""
+    `stop_timeout` s. `local_only` (the default) passes --local-only: only a test inside a network
+    namespace of its own (netns.py) may leave it off."""
 
     def __init__(self, world, fast=False, speed=None, duration=None, paused=False, extra_args=(),
-                 stop_timeout=15.0):
+                 stop_timeout=15.0, local_only=True):
         self.world = world
         self.stop_timeout = stop_timeout
         self._dir = tempfile.TemporaryDirectory(prefix="ubersim_interfaces_")
-        self.world_file = world.write(self._dir.name)
+        # A World is written to a temporary file; a path (a shipped world, as a user runs it) is used as it is.
+        self.world_file = world if isinstance(world, str) else world.write(self._dir.name)
         self.log_path = os.path.join(self._dir.name, "ubersim.log")
         self.args = [BINARY, "run", self.world_file, "--quiet"]
+        # Outside a network namespace of its own a test never sends on the machine's interfaces.
+        if local_only:
+            self.args.append("--local-only")
         if fast:
             self.args.append("--fast")
         if speed is not None:
@@ -233,21 +238,27 @@ class UdpClient:
 
 class MulticastReceiver:
     """Receives a multicast group on one port, joined on the interface `interface` (loopback by
-    default: works with no network)."""
+    default: works with no network; "0.0.0.0" lets the system pick, as most team software does).
+    `bind_any` binds ("", port), as team software and grSim's clients do, instead of the group."""
 
-    def __init__(self, port, group=VISION_GROUP, interface=LOOPBACK):
+    def __init__(self, port, group=VISION_GROUP, interface=LOOPBACK, bind_any=False):
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
         self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        self.sock.bind((group, port))  # only this group's datagrams
+        self.sock.bind(("" if bind_any else group, port))
         membership = struct.pack("4s4s", socket.inet_aton(group), socket.inet_aton(interface))
         self.sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, membership)
         self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
 
     def recv(self, timeout):
         """Bytes of the next datagram, or None after `timeout` s."""
+        received = self.recv_from(timeout)
+        return received[0] if received else None
+
+    def recv_from(self, timeout):
+        """(bytes, (source address, port)) of the next datagram, or None after `timeout` s."""
         self.sock.settimeout(max(timeout, 1e-4))  # 0 would make the socket non-blocking
         try:
-            return self.sock.recv(65536)
+            return self.sock.recvfrom(65536)
         except (socket.timeout, BlockingIOError):
             return None
 

@@ -200,7 +200,11 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   EXPECT_EQ(w.transports[1].params.GetInt("port", 0), 20011);
   EXPECT_EQ(w.transports[2].plugin, "ssl_simulation");
   EXPECT_EQ(w.transports[2].params.GetInt("control_port", 0), 10300);
-  EXPECT_EQ(w.transports[2].params.GetString("address", ""), "127.0.0.1");
+  // Heard and seen wherever the vision goes: loopback and the default route's interface.
+  EXPECT_EQ(w.transports[0].params.GetString("interface", ""), "auto");
+  EXPECT_EQ(w.transports[1].params.GetString("address", ""), "auto");
+  EXPECT_EQ(w.transports[2].params.GetString("address", ""), "auto");
+  EXPECT_FALSE(w.local_only);
   EXPECT_EQ(w.transports[3].plugin, "viewer");
   EXPECT_EQ(w.transports[3].params.GetInt("port", 0), 8080);
   EXPECT_EQ(w.perception.preset, "realistic");  // today's league: one camera over Div B, 6 m up

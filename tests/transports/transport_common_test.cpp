@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // UdpServer, MulticastSender, units, wire clock and reject log, with real sockets on loopback.
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "transport_common/multicast_sender.hpp"
+#include "transport_common/network.hpp"
 #include "transport_common/reject_log.hpp"
 #include "transport_common/udp_server.hpp"
 #include "transport_common/wire_clock.hpp"
@@ -71,7 +73,7 @@ struct Inbox {
 TEST(UdpServer, HandsOverEachDatagramWithItsSenderAndReplies) {
   Inbox inbox;
   UdpServer* server_ptr = nullptr;
-  UdpServer server({"127.0.0.1", 0, 1000, "test"}, [&](std::span<const std::uint8_t> b, const UdpEndpoint& from) {
+  UdpServer server({{"127.0.0.1"}, 0, 1000, "test"}, [&](std::span<const std::uint8_t> b, const UdpEndpoint& from) {
     inbox.Add(inbox.items, std::string(b.begin(), b.end()));
     server_ptr->Reply(from, Bytes("pong:" + std::string(b.begin(), b.end())));
   });
@@ -95,7 +97,7 @@ TEST(UdpServer, HandsOverEachDatagramWithItsSenderAndReplies) {
 TEST(UdpServer, DropsOversizedDatagramsAndSurvivesAThrowingHandler) {
   Inbox inbox;
   UdpServer server(
-      {"127.0.0.1", 0, 100, "test"},
+      {{"127.0.0.1"}, 0, 100, "test"},
       [&](std::span<const std::uint8_t> b, const UdpEndpoint&) {
         if (b.size() == 1) throw std::runtime_error("boom");
         inbox.Add(inbox.items, std::string(b.begin(), b.end()));
@@ -122,7 +124,7 @@ TEST(UdpServer, TheDropHandlerKnowsTheKindAndCanReplyToTheSender) {
   Inbox inbox;
   UdpServer* server_ptr = nullptr;
   UdpServer server(
-      {"127.0.0.1", 0, 100, "test"}, [&](std::span<const std::uint8_t>, const UdpEndpoint&) {},
+      {{"127.0.0.1"}, 0, 100, "test"}, [&](std::span<const std::uint8_t>, const UdpEndpoint&) {},
       [&](const DropReason& why, const UdpEndpoint& from) {
         if (why.kind == DropReason::Kind::kOversized) server_ptr->Reply(from, Bytes("too long: " + why.text));
         inbox.Add(inbox.drops, why.text);
@@ -138,17 +140,17 @@ TEST(UdpServer, TheDropHandlerKnowsTheKindAndCanReplyToTheSender) {
 }
 
 TEST(UdpServer, APortInUseIsAnErrorNamingAddressAndPort) {
-  UdpServer first({"127.0.0.1", 0, 100, "first"}, [](auto, const auto&) {});
+  UdpServer first({{"127.0.0.1"}, 0, 100, "first"}, [](auto, const auto&) {});
   const int port = first.LocalEndpoint().port();
   try {
-    UdpServer second({"127.0.0.1", static_cast<std::uint16_t>(port), 100, "grsim"}, [](auto, const auto&) {});
+    UdpServer second({{"127.0.0.1"}, static_cast<std::uint16_t>(port), 100, "grsim"}, [](auto, const auto&) {});
     FAIL() << "bound a port in use";
   } catch (const std::runtime_error& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("grsim: cannot bind UDP 127.0.0.1:" + std::to_string(port)), std::string::npos) << what;
     EXPECT_NE(what.find("in use"), std::string::npos) << what;
   }
-  EXPECT_THROW(UdpServer({"localhost", 0, 100, "x"}, [](auto, const auto&) {}), std::runtime_error);
+  EXPECT_THROW(UdpServer({{"localhost"}, 0, 100, "x"}, [](auto, const auto&) {}), std::runtime_error);
 }
 
 TEST(MulticastSender, ReachesAReceiverJoinedOnLoopback) {
@@ -162,8 +164,8 @@ TEST(MulticastSender, ReachesAReceiverJoinedOnLoopback) {
   setsockopt(receiver.native_handle(), SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
   const std::uint16_t port = receiver.local_endpoint().port();
 
-  MulticastSender sender({"224.5.23.2", port, "127.0.0.1", 1, true, "test"});
-  EXPECT_EQ(sender.Describe(), "udp multicast 224.5.23.2:" + std::to_string(port) + " via 127.0.0.1");
+  MulticastSender sender({"224.5.23.2", port, {"127.0.0.1"}, false, 1, true, "test"});
+  EXPECT_EQ(sender.Describe(), "udp multicast 224.5.23.2:" + std::to_string(port) + " via lo 127.0.0.1");
   ASSERT_TRUE(sender.Send(Bytes("frame"))) << sender.LastError();
   std::array<char, 100> buf{};
   boost::system::error_code ec;
@@ -172,11 +174,85 @@ TEST(MulticastSender, ReachesAReceiverJoinedOnLoopback) {
   EXPECT_EQ(std::string(buf.data(), n), "frame");
   EXPECT_EQ(sender.Sent(), 1u);
 
-  EXPECT_EQ(MulticastSender({"224.5.23.2", 10020, "", 1, true, "t"}).Describe(),
-            "udp multicast 224.5.23.2:10020 via the system's choice");
-  EXPECT_EQ(MulticastSender({"127.0.0.1", 10020, "", 1, true, "t"}).Describe(), "udp 127.0.0.1:10020");
-  EXPECT_THROW(MulticastSender({"vision.local", 10020, "127.0.0.1", 1, true, "t"}), std::runtime_error);
-  EXPECT_THROW(MulticastSender({"224.5.23.2", 10020, "127.0.0.1", 300, true, "t"}), std::runtime_error);
+  EXPECT_EQ(MulticastSender({"224.5.23.2", 10020, {"0.0.0.0"}, false, 1, true, "t"}).Describe(),
+            "udp multicast 224.5.23.2:10020 via every interface (0.0.0.0)");
+  EXPECT_EQ(MulticastSender({"127.0.0.1", 10020, {"auto"}, false, 1, true, "t"}).Describe(), "udp 127.0.0.1:10020");
+  // --local-only: loopback, whatever the setting.
+  const MulticastSender local({"224.5.23.2", 10020, {"auto", "0.0.0.0"}, true, 1, true, "t"});
+  EXPECT_EQ(local.Interfaces(), std::vector<std::string>{"127.0.0.1"});
+  EXPECT_EQ(local.Describe(), "udp multicast 224.5.23.2:10020 via lo 127.0.0.1 (local only)");
+  EXPECT_THROW(MulticastSender({"vision.local", 10020, {"127.0.0.1"}, false, 1, true, "t"}), std::runtime_error);
+  EXPECT_THROW(MulticastSender({"224.5.23.2", 10020, {"127.0.0.1"}, false, 300, true, "t"}), std::runtime_error);
+  // An address no interface has cannot carry multicast: named at start.
+  EXPECT_THROW(MulticastSender({"224.5.23.2", 10020, {"192.0.2.77"}, false, 1, true, "t"}), std::runtime_error);
+}
+
+// A server on two addresses answers each request from the address it came to (a tool replying to
+// the source of the vision packets must hear its answer from there). Every 127/8 address is local.
+TEST(UdpServer, ListensOnSeveralAddressesAndRepliesFromTheOneAsked) {
+  UdpServer* server_ptr = nullptr;
+  UdpServer server({{"127.0.0.1", "127.0.0.2"}, 0, 100, "two"}, [&](std::span<const std::uint8_t> b, const UdpEndpoint& from) {
+    server_ptr->Reply(from, b);
+  });
+  server_ptr = &server;
+  ASSERT_EQ(server.LocalEndpoints().size(), 2u);
+  const std::uint16_t port = server.LocalEndpoint().port();
+  ASSERT_NE(port, 0);
+  EXPECT_EQ(server.LocalEndpoints()[1].port(), port);  // one port, chosen once
+  server.Start();
+  for (const char* address : {"127.0.0.1", "127.0.0.2"}) {
+    Client client;
+    client.Send(address, UdpEndpoint(asio::ip::make_address(address), port));
+    udp::endpoint from;
+    std::array<char, 100> buf{};
+    boost::system::error_code ec;
+    const std::size_t n = client.socket.receive_from(asio::buffer(buf), from, 0, ec);
+    ASSERT_FALSE(ec) << ec.message();
+    EXPECT_EQ(std::string(buf.data(), n), address);
+    EXPECT_EQ(from.address().to_string(), address);
+  }
+}
+
+TEST(Network, ReadsTheGroupsJoinedPerInterfaceFromProcNetIgmp) {
+  // As Linux prints it: the group word in host order (224.5.23.2 is 021705E0 on little endian).
+  const std::string text =
+      "Idx\tDevice    : Count Querier\tGroup    Users Timer\tReporter\n"
+      "1\tlo        :     2      V3\n"
+      "\t\t\t\t021705E0     1 0:00000000\t\t0\n"
+      "\t\t\t\t010000E0     1 0:00000000\t\t0\n"
+      "3\tveth0     :     2      V3\n"
+      "\t\t\t\t010000E0     1 0:00000000\t\t0\n"
+      "4\twlp2s0    :     2      V3\n"
+      "\t\t\t\t021705E0     2 0:00000000\t\t0\n";
+  EXPECT_EQ(ParseIgmpMemberships(text, "224.5.23.2"), (std::vector<std::string>{"lo", "wlp2s0"}));
+  EXPECT_EQ(ParseIgmpMemberships(text, "224.0.0.1"), (std::vector<std::string>{"lo", "veth0"}));
+  EXPECT_TRUE(ParseIgmpMemberships(text, "224.5.23.1").empty());
+  EXPECT_TRUE(ParseIgmpMemberships("", "224.5.23.2").empty());
+}
+
+TEST(Network, FindsTheDefaultRouteWithTheLowestMetric) {
+  const std::string text =
+      "Iface\tDestination\tGateway \tFlags\tRefCnt\tUse\tMetric\tMask\t\tMTU\tWindow\tIRTT\n"
+      "wlp2s0\t00000000\t0101A8C0\t0003\t0\t0\t600\t00000000\t0\t0\t0\n"
+      "eth0\t00000000\t0100000A\t0003\t0\t0\t100\t00000000\t0\t0\t0\n"
+      "eth0\t0000000A\t00000000\t0001\t0\t0\t100\t00FFFFFF\t0\t0\t0\n"
+      "down0\t00000000\t0100000A\t0002\t0\t0\t1\t00000000\t0\t0\t0\n";
+  EXPECT_EQ(ParseDefaultRoute(text), "eth0");
+  EXPECT_EQ(ParseDefaultRoute("Iface\tDestination\n"), "");
+}
+
+TEST(Network, AutoIsLoopbackFirstAndLocalOnlyIsLoopbackAlone) {
+  const std::vector<std::string> automatic = ResolveAddresses({"auto"}, false);
+  ASSERT_FALSE(automatic.empty());
+  EXPECT_EQ(automatic.front(), "127.0.0.1");
+  EXPECT_LE(automatic.size(), 2u);
+  EXPECT_EQ(ResolveAddresses({"auto", "10.1.2.3"}, true), std::vector<std::string>{"127.0.0.1"});
+  EXPECT_EQ(ResolveAddresses({"10.1.2.3", "10.1.2.3", ""}, false), (std::vector<std::string>{"10.1.2.3", "0.0.0.0"}));
+  const auto params = ubersim::ParamView::FromJson(R"({"one": "127.0.0.1", "two": ["auto", "10.0.0.1"], "none": []})");
+  EXPECT_EQ(AddressSetting(params, "one", "auto"), std::vector<std::string>{"127.0.0.1"});
+  EXPECT_EQ(AddressSetting(params, "two", "auto"), (std::vector<std::string>{"auto", "10.0.0.1"}));
+  EXPECT_EQ(AddressSetting(params, "absent", "auto"), std::vector<std::string>{"auto"});
+  EXPECT_THROW(AddressSetting(params, "none", "auto"), ubersim::ParamError);
 }
 
 TEST(WireUnits, ConvertOnlyAtTheWire) {

@@ -12,6 +12,7 @@
 #include <ubersim/ubersim.hpp>
 
 #include "grsim_translator.hpp"
+#include "transport_common/network.hpp"
 #include "transport_common/reject_log.hpp"
 #include "transport_common/udp_server.hpp"
 #include "ubersim_plugin_schema.hpp"
@@ -41,7 +42,8 @@ class GrsimTransport final : public ubersim::Transport {
     rejects_ = std::make_unique<RejectLog>(ctx.Logger(), "grSim datagram rejected");
 
     UdpServer::Options o;
-    o.address = p.GetString("address", "127.0.0.1");
+    o.addresses = ubersim::transport::ResolveAddresses(ubersim::transport::AddressSetting(p, "address", "auto"),
+                                                       ctx.LocalOnly());
     o.port = static_cast<std::uint16_t>(p.GetInt("port", 20011));
     o.max_datagram = static_cast<std::size_t>(p.GetInt("max_datagram", 16384));
     o.name = "grsim";
@@ -70,7 +72,11 @@ class GrsimTransport final : public ubersim::Transport {
 
   std::string Endpoint() const override {
     if (!server_) return {};
-    return "udp " + ubersim::transport::ToString(server_->LocalEndpoint()) +
+    std::string where;
+    for (const UdpEndpoint& e : server_->LocalEndpoints()) {
+      where += (where.empty() ? "" : ", ") + ubersim::transport::ToString(e);
+    }
+    return "udp " + where +
            " (robot status to the sender's IP at " + std::to_string(status_port_blue_) + " blue, " +
            std::to_string(status_port_yellow_) + " yellow)";
   }

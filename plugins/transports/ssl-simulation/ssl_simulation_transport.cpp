@@ -22,6 +22,7 @@
 #include "mapping.hpp"
 #include "sim_bridge.hpp"
 #include "sync_server.hpp"
+#include "transport_common/network.hpp"
 #include "transport_common/reject_log.hpp"
 #include "transport_common/udp_server.hpp"
 #include "ubersim_plugin_schema.hpp"
@@ -64,7 +65,7 @@ class SslSimulationTransport final : public Transport {
   void Start(TransportContext& context) override {
     context_ = &context;
     const ParamView& p = context.Params();
-    address_ = p.GetString("address", "127.0.0.1");
+    addresses_ = transport::ResolveAddresses(transport::AddressSetting(p, "address", "auto"), context.LocalOnly());
     max_message_ = static_cast<std::size_t>(p.GetInt("max_message_size", 16384));
     if (p.Has("wheel_velocity_order")) {
       options_.wheel_order.clear();
@@ -93,7 +94,8 @@ class SslSimulationTransport final : public Transport {
         sync_.max_step = s.GetDouble("max_step", sync_.max_step);
         sync_.max_clients = static_cast<std::size_t>(s.GetInt("max_clients", 4));
         sync_.timeout = s.GetDouble("timeout", sync_.timeout);
-        sync_server_ = std::make_unique<SyncServer>(io_, address_, sync_.port, max_message_, sync_.max_clients,
+        // Synchronous stepping is for tools on this machine or named ones: the first address only.
+        sync_server_ = std::make_unique<SyncServer>(io_, addresses_.front(), sync_.port, max_message_, sync_.max_clients,
                                                     context.Logger(),
                                                     [this](const SimulationSyncRequest& r) { return OnSync(r); });
         // No real-time clock may drive a synchronous world: it steps only when a client asks.
@@ -117,11 +119,12 @@ class SslSimulationTransport final : public Transport {
   std::string Endpoint() const override {
     std::string out = "udp";
     for (std::size_t i = 0; i < udp_.size(); ++i) {
-      out += (i ? ", " : " ") + address_ + ":" + std::to_string(udp_[i]->server->LocalEndpoint().port()) + " (" +
-             udp_[i]->name + ")";
+      out += (i ? ", " : " ") + std::to_string(udp_[i]->server->LocalEndpoint().port()) + " (" + udp_[i]->name + ")";
     }
+    out += " on";
+    for (std::size_t i = 0; i < addresses_.size(); ++i) out += (i ? ", " : " ") + transport::DescribeAddress(addresses_[i]);
     if (sync_server_) {
-      out += "; tcp " + address_ + ":" + std::to_string(sync_.port) + " (sync, " + ToString(sync_.team) + ")";
+      out += "; tcp " + addresses_.front() + ":" + std::to_string(sync_.port) + " (sync, " + ToString(sync_.team) + ")";
     }
     return out;
   }
@@ -147,7 +150,7 @@ class SslSimulationTransport final : public Transport {
     auto p = std::make_unique<UdpPort>(UdpPort{name, std::move(answer), std::move(refuse), nullptr});
     UdpPort* raw = p.get();  // stays put: the port is owned through a pointer
     UdpServer::Options o;
-    o.address = address_;
+    o.addresses = addresses_;
     o.port = static_cast<std::uint16_t>(port);
     o.max_datagram = max_message_;
     o.name = std::string("ssl_simulation ") + name;
@@ -312,7 +315,7 @@ class SslSimulationTransport final : public Transport {
   }
 
   TransportContext* context_ = nullptr;
-  std::string address_;
+  std::vector<std::string> addresses_;  // the request ports' (every one on each)
   std::size_t max_message_ = 16384;
   MappingOptions options_;
   SyncSettings sync_;

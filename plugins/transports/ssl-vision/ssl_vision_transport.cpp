@@ -18,6 +18,7 @@
 #include <ubersim/ubersim.hpp>
 
 #include "transport_common/multicast_sender.hpp"
+#include "transport_common/network.hpp"
 #include "transport_common/reject_log.hpp"
 #include "transport_common/wire_clock.hpp"
 #include "ubersim_plugin_schema.hpp"
@@ -78,7 +79,8 @@ class SslVisionTransport final : public ubersim::Transport {
     MulticastSender::Options o;
     o.group = p.GetString("address", o.group);
     o.port = static_cast<std::uint16_t>(p.GetInt("port", o.port));
-    o.interface_address = p.GetString("interface", o.interface_address);
+    o.interfaces = ubersim::transport::AddressSetting(p, "interface", "auto");
+    o.local_only = ctx.LocalOnly();
     o.ttl = static_cast<int>(p.GetInt("ttl", o.ttl));
     o.name = "ssl_vision";
     interval_ = std::chrono::duration<double>(p.GetDouble("geometry_interval", 3.0));
@@ -93,6 +95,7 @@ class SslVisionTransport final : public ubersim::Transport {
     geometry_.models = ReadBallModels(p);
     sender_ = std::make_unique<MulticastSender>(o);
     send_log_ = std::make_unique<RejectLog>(ctx.Logger(), "vision packet not sent");
+    WarnIfUnreachable(ctx.Logger());
 
     RebuildGeometry();
     SendGeometry();
@@ -147,6 +150,29 @@ class SslVisionTransport final : public ubersim::Transport {
   }
 
  private:
+  // The league's Go tools (game controller, ssl-vision-client, log recorder, simulation
+  // controller) listen only on interfaces with the MULTICAST flag, which Linux's loopback lacks
+  // by default: said once, with the fix, when loopback is all vision goes out on.
+  void WarnIfUnreachable(ubersim::Log& log) const {
+    bool other = false, flagless_loopback = false;
+    for (const std::string& a : sender_->Interfaces()) {
+      const auto i = ubersim::transport::InterfaceWithAddress(a);
+      if (!i) {
+        other = other || !a.empty();
+      } else if (i->loopback) {
+        flagless_loopback = flagless_loopback || !i->multicast;
+      } else {
+        other = other || i->up;
+      }
+    }
+    if (flagless_loopback && !other) {
+      log.Warning("vision goes out on loopback only, and loopback has no MULTICAST flag: team software "
+                  "that joins on 127.0.0.1 receives it, the league's Go tools (game controller, "
+                  "ssl-vision-client, ssl-log-recorder) do not; to fix it run `sudo ip link set lo "
+                  "multicast on` (docs/league-tools.md)");
+    }
+  }
+
   // Serialises the geometry for the thread to resend (simulation thread).
   void RebuildGeometry() {
     std::string bytes;

@@ -37,14 +37,78 @@ struct Target {
   static Target Robot(RobotId r) { return Target{false, r}; }
 };
 
+/// What became of an event that asked for an answer (EventReply): applied as a whole when
+/// `errors` is empty.
+struct EventAnswer {
+  std::vector<std::string> errors;     ///< why it (or a part of it) was refused, one entry each
+  std::vector<std::string> unapplied;  ///< what it asked for that the world does not model (it was left out)
+};
+
+/// Called once, on the simulation thread, with what became of an event; may be empty.
+using EventReply = std::function<void(const EventAnswer&)>;
+
 /// Position event (the paper's): teleports the ball or a robot. Unset fields stay as they are.
+/// A robot not in the world with `present` true is built from its team's robot model and put on
+/// the field (robot ids 0..15); then `position` is needed.
 struct PositionEvent {
   Target target;                        ///< what to move
   std::optional<Vec3> position;         ///< new position, m (robots: z ignored, put on carpet)
   std::optional<double> yaw;            ///< new heading, rad (robots)
   std::optional<Vec3> velocity;         ///< new linear velocity, m/s
   std::optional<Vec3> angular_velocity; ///< new angular velocity, rad/s
-  std::optional<bool> present;          ///< robots: false takes it off the field, true puts it back
+  std::optional<bool> present;          ///< robots: false takes it off the field, true puts it on
+  EventReply reply;                     ///< optional: what became of it
+};
+
+/// A robot's specifications as its team announces them (the simulation protocol's RobotSpecs),
+/// SI. Unset fields keep the team's robot model's value.
+struct RobotSpec {
+  std::optional<double> radius;                    ///< chassis radius, m
+  std::optional<double> height;                    ///< chassis height, m
+  std::optional<double> mass;                      ///< kg
+  std::optional<double> center_to_dribbler;        ///< centre to the front flat (dribbler), m
+  std::optional<double> max_flat_kick_speed;       ///< m/s
+  std::optional<double> max_chip_kick_speed;       ///< m/s
+  std::optional<double> max_speed;                 ///< m/s
+  std::optional<double> max_angular_speed;         ///< rad/s
+  std::optional<double> max_acceleration;          ///< speeding up, m/s²
+  std::optional<double> max_angular_acceleration;  ///< speeding up, rad/s²
+  std::optional<double> max_deceleration;          ///< braking, m/s²
+  std::optional<double> max_angular_deceleration;  ///< braking, rad/s²
+  /// Wheel angles, rad, counter-clockwise from the robot's forward direction, in the order of
+  /// the drive's wheels.
+  std::optional<std::vector<double>> wheel_angles;
+  std::optional<double> dribbler_width;            ///< usable width of the dribbler bar, m
+};
+
+/// Robot spec event: from now on robot `robot` is built from its team's robot model with `spec`
+/// over it, checked like a model file. A robot on the field is rebuilt at once, keeping its pose
+/// and velocity; one not in the world is built so when it comes on.
+struct RobotSpecEvent {
+  RobotId robot;     ///< which robot
+  RobotSpec spec;    ///< the values over the team's model
+  EventReply reply;  ///< optional: errors per value, values the model has no place for
+};
+
+/// The field size a client asks for (the simulation protocol's geometry), m. The world
+/// rebuilds its field when one of its known fields has that size, keeping the robots and ball.
+struct FieldEvent {
+  double field_length = 0;   ///< between the goal lines
+  double field_width = 0;    ///< between the touch lines
+  double goal_width = 0;     ///< between the posts
+  double goal_depth = 0;     ///< goal line to goal back
+  double boundary_width = 0; ///< touch line to wall
+  std::optional<double> penalty_area_depth;  ///< when given
+  std::optional<double> penalty_area_width;  ///< when given
+  EventReply reply;          ///< optional: applied, or why not
+};
+
+/// A transport setting changed while running (e.g. "vision_port" from the simulation protocol):
+/// offered to every transport (Transport::OnSetting); answered with an error when none takes it.
+struct TransportSettingEvent {
+  std::string name;        ///< e.g. "vision_port"
+  std::int64_t value = 0;  ///< the new value
+  EventReply reply;        ///< optional: taken, or why not
 };
 
 /// Wheel speeds, rad/s, in the order of the drive's wheels.
@@ -110,7 +174,8 @@ struct RealismEvent {
 };
 
 /// Any event a transport or tool can post to the kernel.
-using Event = std::variant<PositionEvent, CommandEvent, QueryEvent, ClockEvent, RealismEvent>;
+using Event = std::variant<PositionEvent, CommandEvent, QueryEvent, ClockEvent, RealismEvent, RobotSpecEvent,
+                           FieldEvent, TransportSettingEvent>;
 
 /// Where events go. Post is thread-safe; the kernel applies events at the start of the next step,
 /// on the simulation thread, in the order they were posted.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,9 @@ class UBERSIM_SDK_API TransportContext {
   virtual const std::string& WorldName() const = 0;
   /// The simulated cameras (ids and positions), for geometry packets.
   virtual std::vector<CameraInfo> Cameras() const = 0;
+  /// True when the world keeps every transport on loopback (the world's `local_only: true`,
+  /// `ubersim run --local-only`): no socket bound or sent on another interface.
+  virtual bool LocalOnly() const = 0;
 };
 
 /// Connects the simulation to the outside (network protocols, viewers). Poll, Publish and
@@ -46,6 +50,10 @@ class UBERSIM_SDK_API Transport {
   virtual void Publish(const WorldSnapshot& /*snapshot*/) {}
   /// When a camera frame leaves the perception pipeline's latency queue.
   virtual void OnVisionFrame(const VisionFrame& /*frame*/) {}
+  /// A setting changed while running (TransportSettingEvent, e.g. "vision_port"), on the
+  /// simulation thread: true when this transport took it; throw PluginError for a value it
+  /// refuses (the message is the answer).
+  virtual bool OnSetting(const std::string& /*name*/, std::int64_t /*value*/) { return false; }
   /// Where it listens or sends, for `ubersim run` to print ("udp 224.5.23.2:10020").
   virtual std::string Endpoint() const { return {}; }
   /// Closes sockets and joins every thread it started.

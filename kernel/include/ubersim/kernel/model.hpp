@@ -144,6 +144,8 @@ struct WorldModel {
   /// What a plugin fault does: "stop" (the default: the world stops after the step, state
   /// saved) or "disable" (the plugin is switched off and the world carries on); fault.hpp.
   std::string on_plugin_fault = "stop";
+  /// Every transport on loopback only (`local_only: true`, `ubersim run --local-only`).
+  bool local_only = false;
 };
 
 /// Gives the JSON Schema of a plugin's parameter block, or throws std::runtime_error saying why

@@ -138,6 +138,9 @@ class World {
   void Deliver(const CommandEvent& e);
   void Apply(const ClockEvent& e);
   void Apply(const RealismEvent& e);
+  void Apply(const RobotSpecEvent& e);
+  void Apply(const FieldEvent& e);
+  void Apply(const TransportSettingEvent& e);
   ObjectState Query(const Target& t) const;
   Robot* FindRobot(const RobotId& id) const;
 

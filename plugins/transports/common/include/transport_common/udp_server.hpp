@@ -7,6 +7,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 #include <boost/asio/ip/udp.hpp>
 
@@ -38,9 +39,10 @@ struct DropReason {
   operator const std::string&() const { return text; }
 };
 
-/// A UDP socket bound to one address:port, received on its own thread (a Boost.Asio io_context),
-/// each whole datagram handed to a handler with its sender. Thread-safe Reply. Datagrams longer
-/// than `max_datagram` are dropped and reported, never handed over cut short.
+/// UDP sockets bound to one port on one or more addresses, received on one thread of their own
+/// (a Boost.Asio io_context), each whole datagram handed to a handler with its sender. A reply
+/// leaves from the address its request came to. Thread-safe Reply. Datagrams longer than
+/// `max_datagram` are dropped and reported, never handed over cut short.
 class UdpServer {
  public:
   /// What arrived: the bytes (valid during the call) and who sent them.
@@ -51,13 +53,14 @@ class UdpServer {
 
   /// Where to listen and how large a datagram may be.
   struct Options {
-    std::string address = "127.0.0.1";  ///< numeric; "" or "0.0.0.0" = every interface
+    /// Numeric addresses to bind, each with its own socket; "" or "0.0.0.0" = every interface.
+    std::vector<std::string> addresses = {"127.0.0.1"};
     std::uint16_t port = 0;              ///< 0 = the system picks one (see LocalEndpoint)
     std::size_t max_datagram = 65507;    ///< bytes; longer ones are dropped
     std::string name = "udp server";     ///< for error messages
   };
 
-  /// Binds the socket (throws std::runtime_error naming address and port when it cannot, e.g.
+  /// Binds the sockets (throws std::runtime_error naming address and port when it cannot, e.g.
   /// "grsim: cannot bind UDP 127.0.0.1:20011: Address already in use"); does not start receiving.
   UdpServer(const Options& options, Handler handler, DropHandler on_drop = {});
   /// Stops and joins.
@@ -69,11 +72,14 @@ class UdpServer {
   void Start();
   /// Closes the socket and joins the thread; idempotent. Never call it from a handler.
   void Stop();
-  /// Sends one datagram to `to`; thread-safe, never blocks on the network. False when it could
-  /// not be queued or sent (the reason goes to the drop handler).
+  /// Sends one datagram to `to` from the socket that last heard from its address (inside a
+  /// handler: the one that received the datagram); thread-safe, never blocks on the network.
+  /// False when it could not be queued or sent (the reason goes to the drop handler).
   bool Reply(const UdpEndpoint& to, std::span<const std::uint8_t> bytes);
-  /// The bound address and port (the real port when Options::port was 0).
+  /// The first bound address and port (the real port when Options::port was 0).
   UdpEndpoint LocalEndpoint() const;
+  /// Every bound address and port.
+  std::vector<UdpEndpoint> LocalEndpoints() const;
 
   /// Datagrams handed to the handler / dropped since construction (any thread).
   std::uint64_t Received() const;
