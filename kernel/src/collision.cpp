@@ -237,6 +237,21 @@ CollisionManager::~CollisionManager() {
   graph_.SetGeomListener(nullptr, nullptr);
 }
 
+void CollisionManager::GeometriesAdded() {
+  balls_found_ = false;
+  balls_.clear();
+  sweep_targets_.clear();
+}
+
+void CollisionManager::GeometriesRemoved() {
+  // Destroyed geometries already left their ODE spaces (dGeomDestroy); the lists beside them
+  // and the caches keyed by their addresses did not.
+  SetBroadphase(broadphase_);
+  GeometriesAdded();
+  surfaces_.clear();
+  ball_touching_.clear();
+}
+
 void CollisionManager::Unfile() {
   graph_.Root().ForEachGeom([](GeomImpl& g) {
     if (dSpaceID s = dGeomGetSpace(g.id())) dSpaceRemove(s, g.id());

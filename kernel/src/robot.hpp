@@ -53,6 +53,7 @@ class Robot {
   BodyImpl& chassis() { return *chassis_; }         ///< chassis body
   NodeImpl& node() { return *node_; }               ///< the robot's node
   bool present() const { return present_; }         ///< on the field
+  const RobotModel& model() const { return *model_; }  ///< what it was built from
 
   /// Components' PreStep (drive, dribbler, kicker order).
   void PreStep(const StepInfo& step);

@@ -412,6 +412,10 @@ SceneNode& NodeImpl::AddChild(std::string_view name) {
   return *children_.back();
 }
 
+void NodeImpl::RemoveChild(const NodeImpl& child) {
+  std::erase_if(children_, [&child](const std::unique_ptr<NodeImpl>& c) { return c.get() == &child; });
+}
+
 NodeImpl* NodeImpl::FindChildNode(std::string_view name) const {
   for (const auto& c : children_) {
     if (c->name_ == name) return c.get();

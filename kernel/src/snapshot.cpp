@@ -54,6 +54,52 @@ void Get(const google::protobuf::RepeatedField<double>& in, std::array<double, N
   std::copy(in.begin(), in.end(), out.begin());
 }
 
+// The RobotSpec fields with the proto's accessors, in one table for both directions.
+template <typename F>
+void ForEachSpecField(F&& f) {
+  f(&RobotSpec::radius, &pb::RobotSpec::has_radius, &pb::RobotSpec::radius, &pb::RobotSpec::set_radius);
+  f(&RobotSpec::height, &pb::RobotSpec::has_height, &pb::RobotSpec::height, &pb::RobotSpec::set_height);
+  f(&RobotSpec::mass, &pb::RobotSpec::has_mass, &pb::RobotSpec::mass, &pb::RobotSpec::set_mass);
+  f(&RobotSpec::center_to_dribbler, &pb::RobotSpec::has_center_to_dribbler, &pb::RobotSpec::center_to_dribbler,
+    &pb::RobotSpec::set_center_to_dribbler);
+  f(&RobotSpec::max_flat_kick_speed, &pb::RobotSpec::has_max_flat_kick_speed, &pb::RobotSpec::max_flat_kick_speed,
+    &pb::RobotSpec::set_max_flat_kick_speed);
+  f(&RobotSpec::max_chip_kick_speed, &pb::RobotSpec::has_max_chip_kick_speed, &pb::RobotSpec::max_chip_kick_speed,
+    &pb::RobotSpec::set_max_chip_kick_speed);
+  f(&RobotSpec::max_speed, &pb::RobotSpec::has_max_speed, &pb::RobotSpec::max_speed, &pb::RobotSpec::set_max_speed);
+  f(&RobotSpec::max_angular_speed, &pb::RobotSpec::has_max_angular_speed, &pb::RobotSpec::max_angular_speed,
+    &pb::RobotSpec::set_max_angular_speed);
+  f(&RobotSpec::max_acceleration, &pb::RobotSpec::has_max_acceleration, &pb::RobotSpec::max_acceleration,
+    &pb::RobotSpec::set_max_acceleration);
+  f(&RobotSpec::max_angular_acceleration, &pb::RobotSpec::has_max_angular_acceleration,
+    &pb::RobotSpec::max_angular_acceleration, &pb::RobotSpec::set_max_angular_acceleration);
+  f(&RobotSpec::max_deceleration, &pb::RobotSpec::has_max_deceleration, &pb::RobotSpec::max_deceleration,
+    &pb::RobotSpec::set_max_deceleration);
+  f(&RobotSpec::max_angular_deceleration, &pb::RobotSpec::has_max_angular_deceleration,
+    &pb::RobotSpec::max_angular_deceleration, &pb::RobotSpec::set_max_angular_deceleration);
+  f(&RobotSpec::dribbler_width, &pb::RobotSpec::has_dribbler_width, &pb::RobotSpec::dribbler_width,
+    &pb::RobotSpec::set_dribbler_width);
+}
+
+void PutSpec(const RobotSpec& in, pb::RobotSpec& out) {
+  ForEachSpecField([&](auto field, auto, auto, auto set) {
+    if (in.*field) (out.*set)(*(in.*field));
+  });
+  if (in.wheel_angles) {
+    out.set_has_wheel_angles(true);
+    for (double a : *in.wheel_angles) out.add_wheel_angles(a);
+  }
+}
+
+RobotSpec GetSpec(const pb::RobotSpec& in) {
+  RobotSpec out;
+  ForEachSpecField([&](auto field, auto has, auto get, auto) {
+    if ((in.*has)()) out.*field = (in.*get)();
+  });
+  if (in.has_wheel_angles()) out.wheel_angles.emplace(in.wheel_angles().begin(), in.wheel_angles().end());
+  return out;
+}
+
 Team TeamOf(std::uint32_t v, const std::string& what) {
   if (v > 1) throw SnapshotError(what + ": team " + std::to_string(v) + " is neither blue (0) nor yellow (1)");
   return static_cast<Team>(v);
@@ -200,6 +246,7 @@ void PutState(const SavedState& s, pb::WorldState& out) {
     o->set_team(static_cast<std::uint32_t>(r.id.team));
     o->set_id(r.id.id);
     o->set_present(r.present);
+    o->set_model_file(r.model_file);
     for (const SavedPart& p : r.parts) {
       pb::Part* q = o->add_parts();
       q->set_kind(static_cast<std::uint32_t>(p.kind));
@@ -244,6 +291,12 @@ void PutState(const SavedState& s, pb::WorldState& out) {
     o->set_what(f.what);
     o->set_step(f.step);
     o->set_sim_time_ns(f.sim_time_ns);
+  }
+  for (const auto& [id, spec] : s.robot_specs) {
+    pb::AnnouncedSpec* o = out.add_robot_specs();
+    o->set_team(static_cast<std::uint32_t>(id.team));
+    o->set_id(id.id);
+    PutSpec(spec, *o->mutable_spec());
   }
 }
 
@@ -294,6 +347,7 @@ SavedState GetState(const pb::WorldState& in) {
     SavedRobot o;
     o.id = RobotId{TeamOf(r.team(), "a robot"), r.id()};
     o.present = r.present();
+    o.model_file = r.model_file();
     for (const pb::Part& p : r.parts()) {
       o.parts.push_back(SavedPart{KindOf(p.kind(), "a robot part"), p.plugin(), p.version(), p.failed(), p.state()});
     }
@@ -329,6 +383,9 @@ SavedState GetState(const pb::WorldState& in) {
     o.step = f.step();
     o.sim_time_ns = f.sim_time_ns();
     s.faults.push_back(std::move(o));
+  }
+  for (const pb::AnnouncedSpec& a : in.robot_specs()) {
+    s.robot_specs.emplace_back(RobotId{TeamOf(a.team(), "robot specs"), a.id()}, GetSpec(a.spec()));
   }
   return s;
 }

@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 #include <exception>
 #include <optional>
@@ -155,6 +156,7 @@ World::World(const WorldModel& model, PluginRegistry& registry, Log& log, bool s
       faults_(ParseFaultPolicy(model.on_plugin_fault), log) {
   if (!model_.field || !model_.ball) throw std::runtime_error("world has no field or ball model");
   field_geometry_ = model_.field->geometry;
+  roster_ = model_.robots;
   Build();
   if (start_transports_) {
     for (const TransportModel& tm : model_.transports) {
@@ -227,17 +229,152 @@ void World::Build() {
   services.last_good = &last_good_;
   services.materials = &collision_->materials();
   services.carpet = model_.field->carpet;
-  for (const RobotPlacement& p : model_.robots) {
-    if (FindRobot(p.id)) {
-      throw std::runtime_error(model_.file + ": robot " + Describe(p.id) + " is placed twice");
+  team_nodes_[0] = &blue;
+  team_nodes_[1] = &yellow;
+  for (const RobotPlacement& base : roster_) {
+    if (FindRobot(base.id)) {
+      throw std::runtime_error(model_.file + ": robot " + Describe(base.id) + " is placed twice");
     }
-    NodeImpl& team = p.id.team == Team::kBlue ? blue : yellow;
-    robots_.push_back(std::make_unique<Robot>(p, team, registry_, log_, services));
+    RobotPlacement p = base;
+    p.model = EffectiveModel(base);
+    robots_.push_back(std::make_unique<Robot>(p, p.id.team == Team::kBlue ? blue : yellow, registry_, log_, services));
   }
   last_good_.Track(scene_->Root());
 }
 
+const ModelLoader& World::Loader() {
+  if (!loader_) {
+    loader_ = std::make_unique<ModelLoader>(ModelLoader::DefaultSchemaDir(), [this](PluginKind kind, const std::string& id) {
+      return registry_.Find(kind, id).schema_json;
+    });
+  }
+  return *loader_;
+}
+
+std::shared_ptr<const RobotModel> World::EffectiveModel(const RobotPlacement& placement) {
+  const auto key = std::make_pair(static_cast<int>(placement.id.team), placement.id.id);
+  const auto spec = specs_.find(key);
+  if (spec == specs_.end() || !placement.model) return placement.model;
+  auto& cached = spec_models_[key];
+  if (cached.first != placement.model || !cached.second) {
+    SpecOutcome o = Loader().ApplySpec(*placement.model, spec->second);
+    if (!o.model) {
+      // Accepted for another base model; this one refuses it.
+      log_.Warning("robot " + Describe(placement.id) + ": its robot specs do not fit model '" + placement.model->name +
+                   "' (" + (o.errors.empty() ? std::string("?") : o.errors.front()) + "); built without them");
+      return placement.model;
+    }
+    cached = {placement.model, o.model};
+  }
+  return cached.second;
+}
+
+std::shared_ptr<const RobotModel> World::BaseModel(const RobotId& id) const {
+  for (const RobotPlacement& p : roster_) {
+    if (p.id == id) return p.model;
+  }
+  return model_.team_models[id.team == Team::kBlue ? 0 : 1];
+}
+
+Robot& World::AddRobot(const RobotPlacement& base) {
+  RobotPlacement p = base;
+  p.model = EffectiveModel(base);
+  NodeImpl& team = *team_nodes_[p.id.team == Team::kBlue ? 0 : 1];
+  try {
+    robots_.push_back(std::make_unique<Robot>(p, team, registry_, log_, *robot_services_holder_));
+  } catch (...) {
+    // What the robot built before it threw leaves with its node.
+    if (NodeImpl* n = team.FindChildNode(std::to_string(p.id.id))) team.RemoveChild(*n);
+    RobotsChanged(true);
+    throw;
+  }
+  roster_.push_back(base);
+  RobotsChanged(false);
+  return *robots_.back();
+}
+
+void World::RemoveRobot(const RobotId& id) {
+  const auto it = std::find_if(robots_.begin(), robots_.end(), [&](const auto& r) { return r->id() == id; });
+  if (it == robots_.end()) return;
+  NodeImpl& node = (*it)->node();
+  robots_.erase(it);  // its parts (plugin code) go while its bodies still exist
+  node.parent()->RemoveChild(node);
+  std::erase_if(roster_, [&](const RobotPlacement& p) { return p.id == id; });
+  RobotsChanged(true);
+}
+
+void World::RobotsChanged(bool removed) {
+  if (removed) {
+    collision_->GeometriesRemoved();
+  } else {
+    collision_->GeometriesAdded();
+  }
+  last_good_.Track(scene_->Root());
+  body_ids_for_ = 0;  // the step's body list is made again
+}
+
+Robot* World::ComeOn(const PositionEvent& e, EventAnswer& answer) {
+  const RobotId& id = e.target.robot;
+  const std::shared_ptr<const RobotModel> model = BaseModel(id);
+  const double half_x = 0.5 * field_geometry_.carpet_length, half_y = 0.5 * field_geometry_.carpet_width;
+  if (id.id < 0 || id.id > 15) {
+    answer.errors.push_back("robot " + Describe(id) + ": robot ids are 0..15");
+  } else if (!model) {
+    answer.errors.push_back("robot " + Describe(id) + ": the world names no robot model for team " +
+                            ToString(id.team) + " (teams." + ToString(id.team) + ".model)");
+  } else if (!e.position) {
+    answer.errors.push_back("robot " + Describe(id) + " is not in the world: a position is needed to put it on");
+  } else if (std::abs(e.position->x()) > half_x || std::abs(e.position->y()) > half_y) {
+    answer.errors.push_back("robot " + Describe(id) + ": (" + std::to_string(e.position->x()) + ", " +
+                            std::to_string(e.position->y()) + ") m lies outside the walls");
+  }
+  if (!answer.errors.empty()) return nullptr;
+  RobotPlacement p;
+  p.id = id;
+  p.model = model;
+  p.x = e.position->x();
+  p.y = e.position->y();
+  p.yaw = e.yaw.value_or(id.team == Team::kBlue ? 0.0 : M_PI);
+  try {
+    Robot& r = AddRobot(p);
+    log_.Info("robot " + Describe(id) + " came on (" + r.model().name + ")");
+    return &r;
+  } catch (const std::exception& ex) {
+    answer.errors.push_back("robot " + Describe(id) + " could not be built: " + ExceptionText(ex));
+  }
+  return nullptr;
+}
+
+void World::RebuildRobot(Robot& robot, EventAnswer& answer) {
+  const RobotId id = robot.id();
+  const Pose pose = robot.chassis().GetPose();
+  const Twist twist = robot.chassis().GetTwist();
+  const bool present = robot.present();
+  RobotPlacement p;
+  for (const RobotPlacement& r : roster_) {
+    if (r.id == id) p = r;
+  }
+  p.x = pose.position.x();
+  p.y = pose.position.y();
+  p.yaw = pose.Yaw();
+  p.present = present;
+  RemoveRobot(id);
+  Robot* built = nullptr;
+  try {
+    built = &AddRobot(p);
+  } catch (const std::exception& ex) {
+    answer.errors.push_back("robot " + Describe(id) + " could not be rebuilt: " + ExceptionText(ex));
+  }
+  if (!built) {
+    specs_.erase({static_cast<int>(id.team), id.id});  // the robot as it was
+    spec_models_.erase({static_cast<int>(id.team), id.id});
+    built = &AddRobot(p);
+  }
+  built->SetVelocity(twist.linear, twist.angular);
+}
+
 void World::Reset() {
+  roster_ = model_.robots;
   Rebuild();
   log_.Info("world reset to " + model_.file);
   PublishSnapshot();  // seen at once, also while paused
@@ -260,6 +397,14 @@ void World::Rebuild() {
   faults_.SetNow(0, 0);
   Build();
 }
+
+namespace {
+bool SpecIsEmpty(const RobotSpec& s) {
+  return !(s.radius || s.height || s.mass || s.center_to_dribbler || s.max_flat_kick_speed || s.max_chip_kick_speed ||
+           s.max_speed || s.max_angular_speed || s.max_acceleration || s.max_angular_acceleration ||
+           s.max_deceleration || s.max_angular_deceleration || s.wheel_angles || s.dribbler_width);
+}
+}  // namespace
 
 Robot* World::FindRobot(const RobotId& id) const {
   for (const auto& r : robots_) {
@@ -319,11 +464,23 @@ void World::Apply(const PositionEvent& e) {
     ++event_counters_.applied;
     return;
   }
+  EventAnswer answer;
+  const auto reply = [&] {
+    if (e.reply) e.reply(answer);
+  };
   Robot* r = FindRobot(e.target.robot);
-  if (!r) {
-    ++event_counters_.rejected;
-    log_.Warning("position event for unknown robot " + Describe(e.target.robot) + " ignored");
-    return;
+  const bool on = e.present && *e.present;
+  if (!r || (!r->present() && !on)) {
+    // Not on the field and not asked to come on: nothing to move, as on grSim.
+    if (!r && on) r = ComeOn(e, answer);
+    if (!r) {
+      if (!answer.errors.empty()) {
+        ++event_counters_.rejected;
+        log_.Warning(answer.errors.front());
+      }
+      reply();
+      return;
+    }
   }
   if (e.present) r->SetPresent(*e.present);
   if (e.position || e.yaw) {
@@ -340,6 +497,7 @@ void World::Apply(const PositionEvent& e) {
     r->SetVelocity(Vec3::Zero(), Vec3::Zero());
   }
   ++event_counters_.applied;
+  reply();
 }
 
 void World::Apply(const CommandEvent& e) {
@@ -420,13 +578,53 @@ void World::Apply(const RealismEvent& e) {
 }
 
 void World::Apply(const RobotSpecEvent& e) {
-  ++event_counters_.rejected;
-  if (e.reply) e.reply(EventAnswer{{"robot specs are not applied by this world"}, {}});
+  EventAnswer answer;
+  const RobotId& id = e.robot;
+  const std::shared_ptr<const RobotModel> base = BaseModel(id);
+  if (id.id < 0 || id.id > 15) {
+    answer.errors.push_back("robot " + Describe(id) + ": robot ids are 0..15");
+  } else if (SpecIsEmpty(e.spec)) {
+    // Nothing over the model: nothing to rebuild.
+  } else if (!base) {
+    answer.errors.push_back("robot " + Describe(id) + ": the world names no robot model for team " + ToString(id.team));
+  } else {
+    SpecOutcome o = Loader().ApplySpec(*base, e.spec);
+    for (std::string& error : o.errors) answer.errors.push_back("robot " + Describe(id) + ": " + error);
+    answer.unapplied = std::move(o.unmapped);
+    if (o.model) {
+      const auto key = std::make_pair(static_cast<int>(id.team), id.id);
+      specs_[key] = e.spec;
+      spec_models_[key] = {base, o.model};
+      if (Robot* r = FindRobot(id)) RebuildRobot(*r, answer);
+    }
+  }
+  if (answer.errors.empty()) {
+    ++event_counters_.applied;
+  } else {
+    ++event_counters_.rejected;
+    log_.Warning("robot specs refused: " + answer.errors.front());
+  }
+  if (e.reply) e.reply(answer);
 }
 
 void World::Apply(const FieldEvent& e) {
-  ++event_counters_.rejected;
-  if (e.reply) e.reply(EventAnswer{{"the field cannot be changed while this world runs"}, {}});
+  // Sizes match to the millimetre the wire carries.
+  const auto same = [](double a, double b) { return std::abs(a - b) < 0.0005; };
+  const FieldGeometry& g = field_geometry_;
+  const bool matches = same(e.field_length, g.field_length) && same(e.field_width, g.field_width) &&
+                       same(e.goal_width, g.goal_width) && same(e.goal_depth, g.goal_depth) &&
+                       same(e.boundary_width, g.boundary_width) &&
+                       (!e.penalty_area_depth || same(*e.penalty_area_depth, g.penalty_area_depth)) &&
+                       (!e.penalty_area_width || same(*e.penalty_area_width, g.penalty_area_width));
+  EventAnswer answer;
+  if (!matches) {
+    answer.errors.push_back("the world's field is '" + g.name + "' (" + std::to_string(g.field_length) + " × " +
+                            std::to_string(g.field_width) + " m); a field of another size is not built while it runs");
+    ++event_counters_.rejected;
+  } else {
+    ++event_counters_.applied;
+  }
+  if (e.reply) e.reply(answer);
 }
 
 void World::Apply(const TransportSettingEvent& e) {
@@ -593,11 +791,11 @@ WorldSnapshot World::Snapshot() const {
   s.ball.twist = ball_->GetTwist();
   s.ball.radius = model_.ball->radius;
   s.robots.reserve(robots_.size());
-  for (Team team : {Team::kBlue, Team::kYellow}) {
-    for (const auto& r : robots_) {
-      if (r->id().team == team) s.robots.push_back(r->State());
-    }
-  }
+  for (const auto& r : robots_) s.robots.push_back(r->State());
+  // Blue first, then yellow, each by id (robots that came on later are last in robots_).
+  std::sort(s.robots.begin(), s.robots.end(), [](const RobotState& a, const RobotState& b) {
+    return a.id.team != b.id.team ? a.id.team == Team::kBlue : a.id.id < b.id.id;
+  });
   s.field = &field_geometry_;
   return s;
 }

@@ -33,9 +33,14 @@ void Mix(std::uint64_t& h, const std::string& s) {
 // The files the world was built from, as the model names them (code-built models name none).
 std::vector<ModelFileDigest> ModelFiles(const WorldModel& m) {
   std::vector<std::string> paths = {m.file, m.field->file, m.ball->file};
-  for (const RobotPlacement& p : m.robots) {
-    paths.push_back(p.model->file);
-    if (!p.model->urdf_file.empty()) paths.push_back(p.model->urdf_file);
+  std::vector<const RobotModel*> models;
+  for (const RobotPlacement& p : m.robots) models.push_back(p.model.get());
+  for (const auto& t : m.team_models) {
+    if (t) models.push_back(t.get());
+  }
+  for (const RobotModel* model : models) {
+    paths.push_back(model->file);
+    if (!model->urdf_file.empty()) paths.push_back(model->urdf_file);
   }
   std::vector<ModelFileDigest> out;
   std::set<std::string> seen;
@@ -73,9 +78,9 @@ std::uint64_t World::StructureDigest() const {
   // Mixed in only when set, so a snapshot saved before the setting existed still restores.
   if (p.solver_iterations_without_ball) Mix(h, static_cast<double>(*p.solver_iterations_without_ball));
   Mix(h, p.broadphase);
-  for (const RobotPlacement& r : model_.robots) {
-    Mix(h, Name(r.id));
-    Mix(h, r.model->name);
+  for (const auto& r : robots_) {
+    Mix(h, Name(r->id()));
+    Mix(h, r->model().name);  // names the robot specs over the model, when there are
   }
   Mix(h, static_cast<double>(perception_.model().cameras.size()));
   Mix(h, perception_.model().frame_rate);
@@ -99,6 +104,9 @@ SavedState World::Save() const {
     SavedRobot saved;
     saved.id = r->id();
     saved.present = r->present();
+    for (const RobotPlacement& p : roster_) {
+      if (p.id == r->id()) saved.model_file = p.model->file;
+    }
     for (PartState& p : r->SaveParts()) {
       saved.parts.push_back(SavedPart{p.kind, std::move(p.plugin), std::move(p.version), p.failed, std::move(p.state)});
     }
@@ -107,6 +115,7 @@ SavedState World::Save() const {
   s.perception = perception_.SaveState();
   s.radio = radio_.SaveState();
   s.faults = faults_.faults();
+  for (const auto& [key, spec] : specs_) s.robot_specs.emplace_back(RobotId{static_cast<Team>(key.first), key.second}, spec);
   return s;
 }
 
@@ -118,22 +127,43 @@ void World::Restore(const SavedState& s) {
     throw SnapshotError("the snapshot's physics step is " + std::to_string(s.step_ns) + " ns, this world's " +
                         std::to_string(clock_.step_ns()) + " ns");
   }
-  if (s.robots.size() != robots_.size()) {
-    throw SnapshotError("the snapshot has " + std::to_string(s.robots.size()) + " robots, " + ours + " " +
-                        std::to_string(robots_.size()));
-  }
-  for (std::size_t i = 0; i < robots_.size(); ++i) {
-    if (!(s.robots[i].id == robots_[i]->id())) {
-      throw SnapshotError("robot " + std::to_string(i) + " is " + Name(s.robots[i].id) + " in the snapshot, " +
-                          Name(robots_[i]->id()) + " in " + ours);
+  // The robots as they were: the world file's, those that came on, each from its model file.
+  std::vector<RobotPlacement> roster;
+  for (const SavedRobot& saved : s.robots) {
+    RobotPlacement p;
+    p.id = saved.id;
+    p.present = saved.present;
+    for (const RobotPlacement& known : model_.robots) {
+      if (!p.model && known.id == saved.id && (saved.model_file.empty() || known.model->file == saved.model_file)) {
+        p = known;
+      }
     }
+    for (const auto& team_model : model_.team_models) {
+      if (!p.model && team_model && team_model->file == saved.model_file) p.model = team_model;
+    }
+    if (!p.model) {
+      throw SnapshotError("the snapshot's robot " + Name(saved.id) + " was built from " +
+                          (saved.model_file.empty() ? std::string("a model") : saved.model_file) + ", which " + ours +
+                          " does not name (neither among its robots nor as a team's model)");
+    }
+    roster.push_back(std::move(p));
   }
   // Files edited since the snapshot: named whether the change is refused or only warned about.
   std::string changed;
   for (const ModelFileDigest& f : s.model_files) {
     if (std::filesystem::exists(f.path) && FileDigest(f.path) != f.digest) changed += (changed.empty() ? "" : ", ") + f.path;
   }
+  // Built as the snapshot's world was, then compared.
+  roster_ = std::move(roster);
+  specs_.clear();
+  spec_models_.clear();
+  for (const auto& [id, spec] : s.robot_specs) specs_[{static_cast<int>(id.team), id.id}] = spec;
+  Rebuild();
   if (s.structure != StructureDigest()) {
+    roster_ = model_.robots;  // as freshly built
+    specs_.clear();
+    spec_models_.clear();
+    Rebuild();
     throw SnapshotError("the snapshot's " + theirs + " has other bodies, geometries, masses or physics settings than " +
                         ours + (changed.empty() ? std::string() : "; changed since the snapshot: " + changed));
   }
@@ -143,7 +173,6 @@ void World::Restore(const SavedState& s) {
   }
   if (s.world_file != model_.file) log_.Info("the snapshot was taken of " + s.world_file);
 
-  Rebuild();
   try {
     for (std::size_t i = 0; i < robots_.size(); ++i) {
       std::vector<PartState> parts;
@@ -155,7 +184,10 @@ void World::Restore(const SavedState& s) {
     perception_.RestoreState(s.perception);
     radio_.RestoreState(s.radio);
   } catch (const std::exception& e) {
-    Rebuild();  // as freshly built, not half restored
+    roster_ = model_.robots;  // as freshly built, not half restored
+    specs_.clear();
+    spec_models_.clear();
+    Rebuild();
     throw SnapshotError(std::string("cannot restore the snapshot into ") + ours + ": " + e.what());
   }
   clock_.Restore(s.step, s.time_ns);

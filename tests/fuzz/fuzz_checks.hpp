@@ -63,6 +63,18 @@ inline void CheckFinite(const std::vector<Event>& events) {
                       Finite(ev.robot_orientation_noise) && Finite(ev.ball_drop) && Finite(ev.robot_drop) &&
                       Finite(ev.camera_overlap) && Finite(ev.radio_latency) && Finite(ev.radio_loss),
                   "realism event with a non-finite value");
+          } else if constexpr (std::is_same_v<T, RobotSpecEvent>) {
+            const RobotSpec& s = ev.spec;
+            bool ok = Finite(s.radius) && Finite(s.height) && Finite(s.mass) && Finite(s.center_to_dribbler) &&
+                      Finite(s.max_flat_kick_speed) && Finite(s.max_chip_kick_speed) && Finite(s.max_speed) &&
+                      Finite(s.max_angular_speed) && Finite(s.max_acceleration) && Finite(s.max_angular_acceleration) &&
+                      Finite(s.max_deceleration) && Finite(s.max_angular_deceleration) && Finite(s.dribbler_width);
+            if (s.wheel_angles) {
+              for (double a : *s.wheel_angles) ok = ok && Finite(a);
+            }
+            Check(ok && ev.robot.id >= 0 && ev.robot.id <= 15, "robot spec event with a non-finite value or bad id");
+          } else if constexpr (std::is_same_v<T, FieldEvent>) {
+            Check(Finite(ev.field_length) && Finite(ev.field_width), "field event with a non-finite size");
           }
         },
         e);

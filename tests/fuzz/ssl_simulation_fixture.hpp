@@ -22,8 +22,11 @@ inline const ssl_simulation::SimBridge& Bridge() {
   return bridge;
 }
 
-/// Whether a robot exists, as the transport asks once a state is known.
-inline bool Exists(const RobotId& id) { return Bridge().Exists(id); }
+/// Where a robot is, as the transport asks once a state is known.
+inline ssl_simulation::Presence Where(const RobotId& id) {
+  if (!Bridge().Exists(id)) return ssl_simulation::Presence::kAbsent;
+  return Bridge().OnField(id) ? ssl_simulation::Presence::kOnField : ssl_simulation::Presence::kOffField;
+}
 
 /// The mapping options of a world file that keeps the default wheel order (`wheels` true) or
 /// switches wheel_velocity off.

@@ -63,13 +63,13 @@ bool Handle(const std::string& frame) {
   std::vector<ssl::WireError> errors;
   const ssl::MappingOptions options = ubersim::fuzz::Options(true);
   if (request.has_simulator_command()) {
-    const ssl::Mapped m = ssl::MapSimulatorCommand(request.simulator_command(), ubersim::fuzz::Exists, options);
+    const ssl::Mapped m = ssl::MapSimulatorCommand(request.simulator_command(), ubersim::fuzz::Where, options);
     ubersim::fuzz::CheckFinite(m.events);
     errors.insert(errors.end(), m.errors.begin(), m.errors.end());
   }
   if (request.has_robot_control()) {
     const ssl::MappedRobotControl m =
-        ssl::MapRobotControl(request.robot_control(), ubersim::Team::kBlue, ubersim::fuzz::Exists, options);
+        ssl::MapRobotControl(request.robot_control(), ubersim::Team::kBlue, ubersim::fuzz::Where, options);
     ubersim::fuzz::CheckFinite(m.events);
     errors.insert(errors.end(), m.errors.begin(), m.errors.end());
   }

@@ -302,22 +302,26 @@ class UdpPorts(unittest.TestCase):
         self.assertEqual(sorted(f.id for f in r.feedback), [0, 3, 5])
         self.assertTrue(all(f.HasField("dribbler_ball_contact") for f in r.feedback))
 
-    def test_config_we_cannot_apply_is_answered_with_codes(self):
+    def test_config_is_applied_or_answered_per_item(self):
         cmd = control_pb.SimulatorCommand()
+        # The world's own field (Div B): acknowledged.
         cmd.config.geometry.field.field_length = 9000
         cmd.config.geometry.field.field_width = 6000
         cmd.config.geometry.field.goal_width = 1000
         cmd.config.geometry.field.goal_depth = 180
         cmd.config.geometry.field.boundary_width = 300
-        spec = cmd.config.robot_specs.add()
+        spec = cmd.config.robot_specs.add()  # nothing over the model
         spec.id.id = 0
         spec.id.team = common_pb.BLUE
-        cmd.config.vision_port = 10020
         cmd.config.realism_config.custom.add(type_url="type.googleapis.com/SomeoneElsesRealism", value=b"")
-        got = codes(control(self.sim, cmd))
-        for code in ("UBERSIM_UNSUPPORTED_GEOMETRY", "UBERSIM_UNSUPPORTED_ROBOT_SPECS",
-                     "UBERSIM_UNSUPPORTED_VISION_PORT", "UBERSIM_UNKNOWN_REALISM_TYPE"):
-            self.assertIn(code, got)
+        self.assertEqual(codes(control(self.sim, cmd)), ["UBERSIM_UNKNOWN_REALISM_TYPE"])
+        cmd = control_pb.SimulatorCommand()
+        cmd.config.geometry.field.field_length = 7000
+        cmd.config.geometry.field.field_width = 5000
+        cmd.config.geometry.field.goal_width = 1000
+        cmd.config.geometry.field.goal_depth = 180
+        cmd.config.geometry.field.boundary_width = 300
+        self.assertEqual(codes(control(self.sim, cmd)), ["UBERSIM_GEOMETRY_NOT_APPLIED"])
         cmd = control_pb.SimulatorCommand()
         cmd.control.teleport_ball.x = 1
         cmd.control.teleport_ball.y = 1
@@ -474,14 +478,12 @@ class UdpWithSyncObserver(unittest.TestCase):
     def test_bad_datagrams_change_nothing(self):
         before = self.positions(self.sync.step(0.1))
         rc = robot_pb.RobotControl()
-        move_local(rc, 1, forward=2.0)
-        move_local(rc, 9, forward=2.0)   # unknown: the whole datagram is refused
-        robot_control(self.sim, self.sim.blue_port, rc)
+        move_local(rc, 9, forward=2.0)   # not on the field: that command only
+        self.assertEqual(codes(robot_control(self.sim, self.sim.blue_port, rc)), ["UBERSIM_UNKNOWN_ROBOT"])
         rc = robot_pb.RobotControl()
         move_local(rc, 1, forward=2.0, angular=float("nan"))
         robot_control(self.sim, self.sim.yellow_port, rc)
         cmd = control_pb.SimulatorCommand()
-        teleport_robot(cmd, common_pb.BLUE, 0, 1.0, 1.0)
         cmd.control.teleport_ball.x = float("inf")
         cmd.control.teleport_ball.y = 0
         self.assertEqual(codes(control(self.sim, cmd)), ["UBERSIM_NON_FINITE"])
@@ -494,6 +496,19 @@ class UdpWithSyncObserver(unittest.TestCase):
         for key in before:
             self.assertAlmostEqual(before[key][0], after[key][0], delta=0.01, msg=key)
             self.assertAlmostEqual(before[key][1], after[key][1], delta=0.01, msg=key)
+
+    def test_valid_teleports_apply_beside_invalid_ones_with_one_error_each(self):
+        cmd = control_pb.SimulatorCommand()
+        teleport_robot(cmd, common_pb.BLUE, 0, 1.5, 1.0)               # valid: moves
+        teleport_robot(cmd, common_pb.BLUE, 1, float("nan"), 0.0)      # invalid: one error
+        teleport_robot(cmd, common_pb.BLUE, 9, 0.0, 0.0)               # not on the field: quiet
+        teleport_robot(cmd, common_pb.YELLOW, 0, -1.5, -1.0)           # valid: moves
+        cmd.control.teleport_ball.x = 0.5                              # partial: one error
+        self.assertEqual(sorted(codes(control(self.sim, cmd))), ["UBERSIM_NON_FINITE", "UBERSIM_PARTIAL_COORD"])
+        after = self.positions(self.sync.step(0.2))
+        self.assertAlmostEqual(after["blue 0"][0], 1.5, delta=0.05)
+        self.assertAlmostEqual(after["yellow 0"][0], -1.5, delta=0.05)
+        self.assertNotIn("blue 9", after)
 
     @staticmethod
     def positions(response):

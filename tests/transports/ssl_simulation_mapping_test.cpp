@@ -11,14 +11,18 @@
 #include "error_codes.hpp"
 #include "mapping.hpp"
 #include "sim_bridge.hpp"
+#include "ssl_simulation_config.pb.h"
 #include "ssl_simulation_custom_erforce.pb.h"
 
 // Inside the project's namespace: the wire messages' global Team and RobotId must not win lookup.
 namespace ubersim::ssl_simulation {
 namespace {
 
-// Blue and yellow robots 0..5 exist.
-bool SixEach(const RobotId& id) { return id.id >= 0 && id.id < 6; }
+// Blue and yellow robots 0..5 are on the field; 6 and 7 in the world but off it.
+Presence SixEach(const RobotId& id) {
+  if (id.id >= 0 && id.id < 6) return Presence::kOnField;
+  return id.id < 8 ? Presence::kOffField : Presence::kAbsent;
+}
 
 const MappingOptions kOptions{};
 
@@ -84,7 +88,7 @@ TEST(SslSimulationMapping, TeleportBallVelocitySlidesOrRolls) {
   EXPECT_LT(contact.norm(), 1e-9);
 }
 
-TEST(SslSimulationMapping, TeleportBallPartialOrNonFiniteRefusesEverything) {
+TEST(SslSimulationMapping, ABadBallTeleportSkipsTheBallOnly) {
   SimulatorCommand c;
   c.mutable_control()->mutable_teleport_ball()->set_x(1.0f);
   TeleportRobot* r = c.mutable_control()->add_teleport_robot();
@@ -93,13 +97,14 @@ TEST(SslSimulationMapping, TeleportBallPartialOrNonFiniteRefusesEverything) {
   r->set_x(0);
   r->set_y(0);
   Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
-  EXPECT_TRUE(m.refused);
-  EXPECT_TRUE(m.events.empty());  // not even the valid robot teleport
-  EXPECT_TRUE(HasCode(m.errors, codes::kPartialCoord));
+  ASSERT_EQ(m.events.size(), 1u);  // the valid robot teleport still applies
+  EXPECT_FALSE(As<PositionEvent>(m.events[0]).target.is_ball);
+  ASSERT_EQ(m.errors.size(), 1u);
+  EXPECT_EQ(m.errors[0].code, codes::kPartialCoord);
 
   c.mutable_control()->mutable_teleport_ball()->set_y(std::numeric_limits<float>::quiet_NaN());
   m = MapSimulatorCommand(c, SixEach, kOptions);
-  EXPECT_TRUE(m.events.empty());
+  EXPECT_EQ(m.events.size(), 1u);
   EXPECT_TRUE(HasCode(m.errors, codes::kNonFinite));
   c.mutable_control()->mutable_teleport_ball()->set_y(std::numeric_limits<float>::infinity());
   EXPECT_TRUE(HasCode(MapSimulatorCommand(c, SixEach, kOptions).errors, codes::kNonFinite));
@@ -117,7 +122,6 @@ TEST(SslSimulationMapping, UnsupportedBallOptionsSkipOnlyTheBall) {
     r->mutable_id()->set_team(::YELLOW);
     r->set_orientation(1.0f);
     const Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
-    EXPECT_FALSE(m.refused);
     EXPECT_TRUE(HasCode(m.errors, which == 0 ? codes::kTeleportSafely : codes::kByForce));
     ASSERT_EQ(m.events.size(), 1u);
     EXPECT_FALSE(As<PositionEvent>(m.events[0]).target.is_ball);
@@ -176,23 +180,64 @@ TEST(SslSimulationMapping, TeleportRobotErrors) {
     setup(*r);
     return MapSimulatorCommand(c, SixEach, kOptions);
   };
-  auto refused_with = [](const Mapped& m, const char* code) {
-    EXPECT_TRUE(m.refused) << code;
+  auto skipped_with = [](const Mapped& m, const char* code) {
     EXPECT_TRUE(m.events.empty()) << code;
-    EXPECT_TRUE(HasCode(m.errors, code)) << code;
+    ASSERT_EQ(m.errors.size(), 1u) << code;
+    EXPECT_EQ(m.errors[0].code, code);
   };
-  refused_with(one([](TeleportRobot& r) { r.mutable_id()->set_id(9); }), codes::kUnknownRobot);
-  refused_with(one([](TeleportRobot& r) { r.mutable_id()->set_team(::UNKNOWN); }), codes::kInvalidTeam);
-  refused_with(one([](TeleportRobot& r) { r.mutable_id()->clear_team(); }), codes::kInvalidTeam);
-  refused_with(one([](TeleportRobot& r) { r.mutable_id()->clear_id(); }), codes::kMissingField);
-  refused_with(one([](TeleportRobot& r) { r.set_x(1); }), codes::kPartialCoord);
-  refused_with(one([](TeleportRobot& r) { r.set_y(1); }), codes::kPartialCoord);
-  refused_with(one([](TeleportRobot& r) { r.set_orientation(std::nanf("")); }), codes::kNonFinite);
-  refused_with(one([](TeleportRobot& r) { r.set_v_x(INFINITY); }), codes::kNonFinite);
-  const Mapped forced = one([](TeleportRobot& r) { r.set_by_force(true); });
-  EXPECT_FALSE(forced.refused);
-  EXPECT_TRUE(forced.events.empty());
-  EXPECT_TRUE(HasCode(forced.errors, codes::kByForce));
+  skipped_with(one([](TeleportRobot& r) { r.mutable_id()->set_id(16); }), codes::kInvalidRobotId);
+  skipped_with(one([](TeleportRobot& r) { r.mutable_id()->set_team(::UNKNOWN); }), codes::kInvalidTeam);
+  skipped_with(one([](TeleportRobot& r) { r.mutable_id()->clear_team(); }), codes::kInvalidTeam);
+  skipped_with(one([](TeleportRobot& r) { r.mutable_id()->clear_id(); }), codes::kMissingField);
+  skipped_with(one([](TeleportRobot& r) { r.set_x(1); }), codes::kPartialCoord);
+  skipped_with(one([](TeleportRobot& r) { r.set_y(1); }), codes::kPartialCoord);
+  skipped_with(one([](TeleportRobot& r) { r.set_orientation(std::nanf("")); }), codes::kNonFinite);
+  skipped_with(one([](TeleportRobot& r) { r.set_v_x(INFINITY); }), codes::kNonFinite);
+  skipped_with(one([](TeleportRobot& r) { r.set_by_force(true); }), codes::kByForce);
+  // A new robot needs a place to come on.
+  skipped_with(one([](TeleportRobot& r) {
+                 r.mutable_id()->set_id(9);
+                 r.set_present(true);
+               }),
+               codes::kCreateNoPosition);
+}
+
+// A robot that is not on the field, with present unset (or false), is a quiet no-op, as on
+// grSim; present: true puts it on (or builds it) and asks the world for an answer.
+TEST(SslSimulationMapping, RobotsNotOnTheFieldAreLeftAloneUnlessAskedToComeOn) {
+  SimulatorCommand c;
+  for (int id = 0; id < 16; ++id) {  // the clearing command of a client written for grSim
+    TeleportRobot* r = c.mutable_control()->add_teleport_robot();
+    r->mutable_id()->set_id(static_cast<std::uint32_t>(id));
+    r->mutable_id()->set_team(::BLUE);
+    r->set_x(-5.0f);
+    r->set_y(0.2f * static_cast<float>(id));
+  }
+  Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
+  EXPECT_TRUE(m.errors.empty());
+  ASSERT_EQ(m.events.size(), 6u);  // 0..5 move; 6, 7 (off the field) and 8..15 (absent) do not
+  for (const Event& e : m.events) EXPECT_LT(As<PositionEvent>(e).target.robot.id, 6);
+
+  SimulatorCommand on;
+  for (int id : {3, 6, 9}) {
+    TeleportRobot* r = on.mutable_control()->add_teleport_robot();
+    r->mutable_id()->set_id(static_cast<std::uint32_t>(id));
+    r->mutable_id()->set_team(::YELLOW);
+    r->set_x(1.0f);
+    r->set_y(2.0f);
+    r->set_present(true);
+  }
+  m = MapSimulatorCommand(on, SixEach, kOptions);
+  EXPECT_TRUE(m.errors.empty());
+  ASSERT_EQ(m.events.size(), 3u);
+  for (const Event& e : m.events) {
+    EXPECT_TRUE(*As<PositionEvent>(e).present);
+    EXPECT_TRUE(WantsAnswer(e));
+  }
+  // Off: no answer needed.
+  on.mutable_control()->mutable_teleport_robot(0)->set_present(false);
+  m = MapSimulatorCommand(on, SixEach, kOptions);
+  EXPECT_FALSE(WantsAnswer(m.events[0]));
 }
 
 TEST(SslSimulationMapping, SimulationSpeed) {
@@ -254,7 +299,6 @@ TEST(SslSimulationMapping, RealismListsWhatItCannotApply) {
   r.set_simulate_dribbling(true);       // what we do anyway: not listed
   r.set_object_position_offset(0.0f);   // likewise
   const Mapped m = MapSimulatorCommand(WithRealism(r, "RealismConfigErForce"), SixEach, kOptions);
-  EXPECT_FALSE(m.refused);
   ASSERT_EQ(m.events.size(), 1u);  // vision_delay still applies
   ASSERT_EQ(m.errors.size(), 1u);
   EXPECT_EQ(m.errors[0].code, codes::kRealismFields);
@@ -266,32 +310,89 @@ TEST(SslSimulationMapping, RealismListsWhatItCannotApply) {
   RealismConfigErForce bad;
   bad.set_missing_ball_detections(1.5f);
   Mapped mb = MapSimulatorCommand(WithRealism(bad, "RealismConfigErForce"), SixEach, kOptions);
-  EXPECT_TRUE(mb.refused);
+  EXPECT_TRUE(mb.events.empty());
   EXPECT_TRUE(HasCode(mb.errors, codes::kInvalidValue));
   bad.set_missing_ball_detections(0.1f);
   bad.set_vision_delay(-5);
   mb = MapSimulatorCommand(WithRealism(bad, "RealismConfigErForce"), SixEach, kOptions);
-  EXPECT_TRUE(mb.refused);
+  EXPECT_TRUE(mb.events.empty());
+  EXPECT_TRUE(HasCode(mb.errors, codes::kInvalidValue));
 
   SimulatorCommand garbled = WithRealism(r, "RealismConfigErForce");
   garbled.mutable_config()->mutable_realism_config()->mutable_custom(0)->set_value("\xff\xff\xff");
   EXPECT_TRUE(HasCode(MapSimulatorCommand(garbled, SixEach, kOptions).errors, codes::kUnreadable));
 }
 
-TEST(SslSimulationMapping, ConfigWeCannotApplyIsNeverSilent) {
+TEST(SslSimulationMapping, ConfigBecomesEventsTheWorldAnswers) {
   SimulatorCommand c;
-  c.mutable_config()->mutable_geometry();
+  SSL_GeometryFieldSize* f = c.mutable_config()->mutable_geometry()->mutable_field();
+  f->set_field_length(12000);
+  f->set_field_width(9000);
+  f->set_goal_width(1800);
+  f->set_goal_depth(180);
+  f->set_boundary_width(300);
   RobotSpecs* s = c.mutable_config()->add_robot_specs();
-  s->mutable_id()->set_id(0);
-  c.mutable_config()->set_vision_port(10020);
+  s->mutable_id()->set_id(3);
+  s->mutable_id()->set_team(::BLUE);
+  s->set_radius(0.085f);
+  s->set_max_linear_kick_speed(5.0f);
+  s->mutable_limits()->set_vel_absolute_max(2.5f);
+  RobotWheelAngles* w = s->mutable_wheel_angles();
+  w->set_front_right(1.0f);  // clockwise from forward: the drive's 2π − 1, counter-clockwise
+  w->set_back_right(2.0f);
+  w->set_back_left(4.0f);
+  w->set_front_left(5.0f);
+  RobotSpecErForce erforce;
+  erforce.set_shoot_radius(0.0815f);
+  erforce.set_dribbler_width(0.07f);
+  google::protobuf::Any* custom = s->add_custom();
+  custom->set_type_url("RobotSpecErForce");  // bare, as ssl-simulation-controller sends it
+  custom->set_value(erforce.SerializeAsString());
+  c.mutable_config()->set_vision_port(10006);
   google::protobuf::Any* any = c.mutable_config()->mutable_realism_config()->add_custom();
   any->set_type_url("type.googleapis.com/RealismConfigGrSim");
   const Mapped m = MapSimulatorCommand(c, SixEach, kOptions);
-  EXPECT_TRUE(HasCode(m.errors, codes::kGeometry));
-  EXPECT_TRUE(HasCode(m.errors, codes::kRobotSpecs));
-  EXPECT_TRUE(HasCode(m.errors, codes::kVisionPort));
-  EXPECT_TRUE(HasCode(m.errors, codes::kUnknownRealism));
-  EXPECT_TRUE(m.events.empty());
+  ASSERT_EQ(m.errors.size(), 1u);
+  EXPECT_EQ(m.errors[0].code, codes::kUnknownRealism);
+  ASSERT_EQ(m.events.size(), 3u);
+  const auto& field = As<FieldEvent>(m.events[0]);
+  EXPECT_DOUBLE_EQ(field.field_length, 12.0);
+  EXPECT_DOUBLE_EQ(field.boundary_width, 0.3);
+  EXPECT_FALSE(field.penalty_area_depth);
+  const auto& spec = As<RobotSpecEvent>(m.events[1]);
+  EXPECT_EQ(spec.robot, (RobotId{Team::kBlue, 3}));
+  EXPECT_NEAR(*spec.spec.radius, 0.085, 1e-7);
+  EXPECT_FALSE(spec.spec.height);  // unset: the model's (the proto's default 0.15 is not a value)
+  EXPECT_NEAR(*spec.spec.max_flat_kick_speed, 5.0, 1e-7);
+  EXPECT_NEAR(*spec.spec.max_speed, 2.5, 1e-7);
+  EXPECT_NEAR(*spec.spec.dribbler_width, 0.07, 1e-7);
+  EXPECT_NEAR(*spec.spec.center_to_dribbler, 0.0815 - kOptions.ball_radius, 1e-7);
+  ASSERT_TRUE(spec.spec.wheel_angles);
+  // Protocol order FR, BR, BL, FL goes to drive wheels 3, 2, 1, 0.
+  EXPECT_NEAR((*spec.spec.wheel_angles)[3], 2 * M_PI - 1.0, 1e-6);
+  EXPECT_NEAR((*spec.spec.wheel_angles)[0], 2 * M_PI - 5.0, 1e-6);
+  const auto& port = As<TransportSettingEvent>(m.events[2]);
+  EXPECT_EQ(port.name, "vision_port");
+  EXPECT_EQ(port.value, 10006);
+  for (const Event& e : m.events) EXPECT_TRUE(WantsAnswer(e));
+
+  // The world's answers, each with its code.
+  EXPECT_EQ(AnswerErrors(m.events[1], EventAnswer{{"mass -1 kg: must be > 0"}, {"height (no place)"}})[0].code,
+            codes::kInvalidSpec);
+  EXPECT_EQ(AnswerErrors(m.events[1], EventAnswer{{}, {"height (no place)"}})[0].code, codes::kUnmappedSpec);
+  EXPECT_EQ(AnswerErrors(m.events[0], EventAnswer{{"no field of that size"}, {}})[0].code, codes::kGeometry);
+  EXPECT_EQ(AnswerErrors(m.events[2], EventAnswer{{"no vision transport"}, {}})[0].code, codes::kVisionPort);
+  EXPECT_TRUE(AnswerErrors(m.events[2], EventAnswer{}).empty());
+
+  // A spec for id 16, a geometry without its sizes: those items only.
+  SimulatorCommand bad;
+  bad.mutable_config()->add_robot_specs()->mutable_id()->set_id(16);
+  bad.mutable_config()->mutable_robot_specs(0)->mutable_id()->set_team(::YELLOW);
+  bad.mutable_config()->mutable_geometry();
+  const Mapped mb = MapSimulatorCommand(bad, SixEach, kOptions);
+  EXPECT_TRUE(mb.events.empty());
+  EXPECT_TRUE(HasCode(mb.errors, codes::kInvalidRobotId));
+  EXPECT_TRUE(HasCode(mb.errors, codes::kMissingField));
 }
 
 TEST(SslSimulationMapping, RobotCommandUnits) {
@@ -345,12 +446,11 @@ TEST(SslSimulationMapping, MoveKinds) {
   MappingOptions off;
   off.wheel_order.clear();
   m = MapRobotControl(rc, Team::kBlue, SixEach, off);
-  EXPECT_FALSE(m.refused);
   EXPECT_TRUE(HasCode(m.errors, codes::kWheelVelocity));
   ASSERT_EQ(m.events.size(), 1u);  // the global-velocity robot still moves
 }
 
-TEST(SslSimulationMapping, RobotCommandErrorsRefuseTheWholeDatagram) {
+TEST(SslSimulationMapping, ABadRobotCommandSkipsThatRobotOnly) {
   auto two = [](auto setup) {
     RobotControl rc;
     RobotCommand* good = rc.add_robot_commands();
@@ -364,11 +464,13 @@ TEST(SslSimulationMapping, RobotCommandErrorsRefuseTheWholeDatagram) {
     return MapRobotControl(rc, Team::kBlue, SixEach, kOptions);
   };
   auto refused_with = [](const MappedRobotControl& m, const char* code) {
-    EXPECT_TRUE(m.refused) << code;
-    EXPECT_TRUE(m.events.empty()) << code;
-    EXPECT_TRUE(HasCode(m.errors, code)) << code;
+    ASSERT_EQ(m.events.size(), 1u) << code;  // robot 0 still moves
+    EXPECT_EQ(As<CommandEvent>(m.events[0]).robot.id, 0) << code;
+    ASSERT_EQ(m.errors.size(), 1u) << code;
+    EXPECT_EQ(m.errors[0].code, code);
   };
-  refused_with(two([](RobotCommand& c) { c.set_id(7); }), codes::kUnknownRobot);
+  refused_with(two([](RobotCommand& c) { c.set_id(7); }), codes::kUnknownRobot);  // off the field
+  refused_with(two([](RobotCommand& c) { c.set_id(12); }), codes::kUnknownRobot);  // not in the world
   refused_with(two([](RobotCommand& c) { c.set_kick_speed(NAN); }), codes::kNonFinite);
   refused_with(two([](RobotCommand& c) { c.set_dribbler_speed(-INFINITY); }), codes::kNonFinite);
   refused_with(two([](RobotCommand& c) {
@@ -392,7 +494,7 @@ TEST(SslSimulationMapping, RobotCommandErrorsRefuseTheWholeDatagram) {
 
 TEST(SslSimulationMapping, ResponseHasFeedbackForEachCommandedRobot) {
   auto contact = [](const RobotId& id) -> std::optional<bool> {
-    if (!SixEach(id)) return std::nullopt;
+    if (SixEach(id) != Presence::kOnField) return std::nullopt;
     return id.id == 2;
   };
   const RobotControlResponse r = BuildRobotControlResponse(
@@ -435,13 +537,19 @@ TEST(SslSimulationMapping, ParseMessageKinds) {
   ASSERT_TRUE(e);
   EXPECT_EQ(e->code, codes::kUnreadable);
 
-  // A RobotCommand without its required id: well-formed, but incomplete.
+  // A RobotCommand without its required id: well-formed, read; that command is refused on its own.
   RobotControl missing;
   missing.add_robot_commands()->set_kick_speed(1);
+  RobotCommand* fine = missing.add_robot_commands();
+  fine->set_id(2);
+  fine->set_dribbler_speed(100);
   const std::string partial = missing.SerializePartialAsString();
-  e = ParseMessage(partial.data(), partial.size(), 1024, out);
-  ASSERT_TRUE(e);
-  EXPECT_EQ(e->code, codes::kMissingField);
+  EXPECT_FALSE(ParseMessage(partial.data(), partial.size(), 1024, out));
+  const MappedRobotControl m = MapRobotControl(out, Team::kBlue, SixEach, kOptions);
+  ASSERT_EQ(m.errors.size(), 1u);
+  EXPECT_EQ(m.errors[0].code, codes::kMissingField);
+  ASSERT_EQ(m.events.size(), 1u);
+  EXPECT_EQ(As<CommandEvent>(m.events[0]).robot.id, 2);
 }
 
 TEST(SslSimulationMapping, DetectionFrameInMillimetres) {

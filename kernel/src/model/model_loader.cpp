@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "model_internal.hpp"
+#include "robot_spec.hpp"
 #include "ubersim/kernel/model.hpp"
 
 namespace ubersim::kernel {
@@ -367,6 +368,7 @@ struct ModelLoader::Impl {
       }
       r->urdf_file = urdf.lexically_normal().string();
     }
+    r->source = v;
     r->surface = ReadSurface(v, "surface", "robot");
     r->drive = Component(v, "drive", PluginKind::kDrive);
     r->dribbler = Component(v, "dribbler", PluginKind::kDribbler);
@@ -438,6 +440,22 @@ struct ModelLoader::Impl {
         }
         w.robots.push_back(std::move(p));
       }
+    }
+
+    // Each team's model for robots that come on while the world runs.
+    for (Team team : {Team::kBlue, Team::kYellow}) {
+      auto& model = w.team_models[team == Team::kBlue ? 0 : 1];
+      const char* name = ToString(team);
+      if (v.Has("teams") && v["teams"].Has(name)) {
+        const ParamView key = v["teams"][name]["model"];
+        model = Robot(resolve(key), &key);
+      }
+      for (const RobotPlacement& p : w.robots) {
+        if (!model && p.id.team == team) model = p.model;
+      }
+    }
+    for (int t = 0; t < 2; ++t) {
+      if (!w.team_models[t]) w.team_models[t] = w.team_models[1 - t];
     }
 
     if (v.Has("physics")) {
@@ -551,6 +569,103 @@ std::shared_ptr<const BallModel> ModelLoader::LoadBall(const std::filesystem::pa
 
 std::shared_ptr<const RobotModel> ModelLoader::LoadRobot(const std::filesystem::path& file) const {
   return Guard(file, [&] { return impl_->Robot(file, nullptr); });
+}
+
+SpecOutcome ModelLoader::ApplySpec(const RobotModel& base, const RobotSpec& spec) const {
+  using model_detail::SpecEdit;
+  SpecOutcome out;
+  const std::string source = "robot_specs";
+  const ParamNode& root = base.source.Node();
+  // Where each set field goes.
+  std::vector<std::pair<std::string, std::vector<SpecEdit>>> fields;
+  const std::pair<const char*, const char*> body_keys[] = {
+      {"radius", "radius"}, {"height", "height"}, {"mass", "mass"}, {"center_to_dribbler", "front_distance"}};
+  const std::pair<const char*, const std::optional<ComponentModel>*> parts[] = {
+      {"drive", &base.drive}, {"dribbler", &base.dribbler}, {"kicker", &base.kicker}};
+  const PluginKind kinds[] = {PluginKind::kDrive, PluginKind::kDribbler, PluginKind::kKicker};
+  for (const std::string& field : model_detail::SetFields(spec)) {
+    std::vector<SpecEdit> edits;
+    bool placed = false;
+    for (const auto& [name, key] : body_keys) {
+      if (field != name) continue;
+      placed = true;
+      if (!base.urdf_file.empty() && field != "center_to_dribbler") {
+        out.unmapped.push_back(field + " (the body comes from the URDF " + base.urdf_file + ")");
+      } else {
+        edits.push_back(SpecEdit{field, {"body", key}, std::nullopt, "", *model_detail::ScalarField(spec, field)});
+      }
+    }
+    for (std::size_t k = 0; k < 3 && !placed; ++k) {
+      const std::optional<ComponentModel>& c = *parts[k].second;
+      if (!c || !impl_->lookup) continue;
+      std::string schema;
+      try {
+        schema = impl_->lookup(kinds[k], c->plugin);
+      } catch (const std::exception&) {
+        continue;  // the model named a plugin that is gone: it was refused when loaded
+      }
+      for (const model_detail::SpecTarget& t : model_detail::SpecTargets(schema)) {
+        if (t.field != field) continue;
+        std::vector<std::string> path = {parts[k].first};
+        path.insert(path.end(), t.path.begin(), t.path.end());
+        if (field != "wheel_angles") {
+          edits.push_back(SpecEdit{field, path, std::nullopt, "", *model_detail::ScalarField(spec, field) * t.scale});
+          continue;
+        }
+        const ParamView array = [&] {
+          ParamView v = base.source;
+          for (const std::string& key : path) v = v[key];
+          return v;
+        }();
+        if (array.Size() != spec.wheel_angles->size()) {
+          out.errors.push_back(model_detail::DescribeField(spec, field) + ": " + std::to_string(spec.wheel_angles->size()) +
+                               " angles for a drive with " + std::to_string(array.Size()) + " wheels");
+          placed = true;
+          edits.clear();
+          break;
+        }
+        for (std::size_t i = 0; i < array.Size(); ++i) {
+          edits.push_back(SpecEdit{field, path, i, t.member, (*spec.wheel_angles)[i] * t.scale});
+        }
+      }
+    }
+    if (!edits.empty()) {
+      fields.emplace_back(field, std::move(edits));
+    } else if (!placed) {
+      out.unmapped.push_back(field + " (robot model '" + base.name + "' has no place for it)");
+    }
+  }
+  if (!out.errors.empty()) return out;
+
+  const auto build = [&](const std::vector<SpecEdit>& edits) {
+    ParamNode edited = root;
+    for (const SpecEdit& e : edits) edited = model_detail::WithEdit(edited, e, source);
+    const ParamView view(std::make_shared<const ParamNode>(std::move(edited)));
+    return impl_->RobotFrom(base.file, impl_->Checked(view, "robot", nullptr, base.file));
+  };
+  // Each value alone first: one error per value the model refuses.
+  std::vector<SpecEdit> all;
+  for (const auto& [field, edits] : fields) {
+    try {
+      build(edits);
+    } catch (const ModelError& e) {
+      out.errors.push_back(model_detail::DescribeField(spec, field) + ": " +
+                           (e.key().empty() ? std::string() : "key '" + e.key() + "': ") + e.reason());
+    }
+    all.insert(all.end(), edits.begin(), edits.end());
+  }
+  if (!out.errors.empty()) return out;
+  try {
+    auto model = std::const_pointer_cast<RobotModel>(build(all));
+    char digest[17];
+    std::snprintf(digest, sizeof digest, "%016llx", static_cast<unsigned long long>(model_detail::SpecDigest(spec)));
+    model->name = base.name + " (robot_specs " + digest + ")";
+    out.model = std::move(model);
+  } catch (const ModelError& e) {
+    out.errors.push_back("the values together: " + (e.key().empty() ? std::string() : "key '" + e.key() + "': ") +
+                         e.reason());
+  }
+  return out;
 }
 
 std::string ModelLoader::Validate(const std::filesystem::path& file) const {

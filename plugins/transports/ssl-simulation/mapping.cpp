@@ -15,18 +15,11 @@ namespace {
 
 std::string Name(const RobotId& id) { return std::string(ToString(id.team)) + " " + std::to_string(id.id); }
 
-// Collects errors and remembers whether one of them refuses the whole message.
+// Collects one error per skipped item.
 class Errors {
  public:
   explicit Errors(Mapped& out) : out_(out) {}
-  // A validation error: nothing of the message applies.
-  void Refuse(const char* code, std::string message) {
-    out_.refused = true;
-    out_.errors.push_back({code, std::move(message)});
-  }
-  // An unsupported item: skipped, the rest applies.
-  void Skip(const char* code, std::string message) { out_.errors.push_back({code, std::move(message)}); }
-  bool refused() const { return out_.refused; }
+  void Add(const char* code, std::string message) { out_.errors.push_back({code, std::move(message)}); }
 
  private:
   Mapped& out_;
@@ -46,22 +39,24 @@ std::optional<Team> ToTeam(const ::RobotId& id) {
   return std::nullopt;
 }
 
+constexpr std::uint32_t kMaxRobotId = 15;  // the rules' ids per team
+
 void MapTeleportBall(const TeleportBall& b, const MappingOptions& options, Errors& errors,
                      std::vector<Event>& events) {
   if (b.teleport_safely()) {
-    errors.Skip(codes::kTeleportSafely, "teleport_ball.teleport_safely is not supported; the ball was not moved");
+    errors.Add(codes::kTeleportSafely, "teleport_ball.teleport_safely is not supported; the ball was not moved");
     return;
   }
   if (b.by_force()) {
-    errors.Skip(codes::kByForce, "teleport_ball.by_force is not supported; the ball was not moved");
+    errors.Add(codes::kByForce, "teleport_ball.by_force is not supported; the ball was not moved");
     return;
   }
   if (!AllFinite({b.x(), b.y(), b.z(), b.vx(), b.vy(), b.vz()})) {
-    errors.Refuse(codes::kNonFinite, "teleport_ball has a NaN or infinite value");
+    errors.Add(codes::kNonFinite, "teleport_ball has a NaN or infinite value; the ball was not moved");
     return;
   }
   if (b.has_x() != b.has_y() || (b.has_z() && !b.has_x())) {
-    errors.Refuse(codes::kPartialCoord, "teleport_ball needs x and y together (z only with them)");
+    errors.Add(codes::kPartialCoord, "teleport_ball needs x and y together (z only with them); the ball was not moved");
     return;
   }
   PositionEvent e;
@@ -79,32 +74,43 @@ void MapTeleportBall(const TeleportBall& b, const MappingOptions& options, Error
   if (e.position || e.velocity) events.emplace_back(std::move(e));
 }
 
-void MapTeleportRobot(const TeleportRobot& t, const RobotExists& exists, Errors& errors,
+void MapTeleportRobot(const TeleportRobot& t, const RobotLookup& robots, Errors& errors,
                       std::vector<Event>& events) {
-  if (!t.id().has_id()) {
-    errors.Refuse(codes::kMissingField, "teleport_robot.id.id is unset");
+  if (!t.has_id() || !t.id().has_id()) {
+    errors.Add(codes::kMissingField, "a teleport_robot has no id.id; it was skipped");
     return;
   }
   const std::optional<Team> team = ToTeam(t.id());
   if (!team) {
-    errors.Refuse(codes::kInvalidTeam, "teleport_robot.id.team must be BLUE or YELLOW");
+    errors.Add(codes::kInvalidTeam, "teleport_robot " + std::to_string(t.id().id()) +
+                                        ": id.team must be BLUE or YELLOW; it was skipped");
+    return;
+  }
+  if (t.id().id() > kMaxRobotId) {
+    errors.Add(codes::kInvalidRobotId, "teleport_robot " + std::string(ToString(*team)) + " " +
+                                           std::to_string(t.id().id()) + ": robot ids are 0..15; it was skipped");
     return;
   }
   const RobotId id{*team, static_cast<int>(t.id().id())};
-  if (t.id().id() > 1000 || !exists(id)) {
-    errors.Refuse(codes::kUnknownRobot, "no robot " + Name(id) + " in this world");
-    return;
-  }
+  const Presence where = robots(id);
+  const bool on = t.has_present() && t.present();
+  // A robot that is not on the field and is not asked to come on: nothing to move, as on grSim
+  // (a client clearing ids 0..15 out of the way moves the robots there are and nothing else).
+  if (where != Presence::kOnField && !on) return;
   if (t.by_force()) {
-    errors.Skip(codes::kByForce, "teleport_robot.by_force is not supported; " + Name(id) + " was not moved");
+    errors.Add(codes::kByForce, "teleport_robot.by_force is not supported; " + Name(id) + " was not moved");
     return;
   }
   if (!AllFinite({t.x(), t.y(), t.orientation(), t.v_x(), t.v_y(), t.v_angular()})) {
-    errors.Refuse(codes::kNonFinite, "teleport_robot for " + Name(id) + " has a NaN or infinite value");
+    errors.Add(codes::kNonFinite, "teleport_robot for " + Name(id) + " has a NaN or infinite value; it was not moved");
     return;
   }
   if (t.has_x() != t.has_y()) {
-    errors.Refuse(codes::kPartialCoord, "teleport_robot for " + Name(id) + " needs x and y together");
+    errors.Add(codes::kPartialCoord, "teleport_robot for " + Name(id) + " needs x and y together; it was not moved");
+    return;
+  }
+  if (where == Presence::kAbsent && !t.has_x()) {
+    errors.Add(codes::kCreateNoPosition, "robot " + Name(id) + " is not in the world: present needs x and y to put it on");
     return;
   }
   PositionEvent e;
@@ -168,14 +174,14 @@ void MapErForceRealism(const RealismConfigErForce& r, Errors& errors, std::vecto
   if (r.has_simulate_dribbling() && !r.simulate_dribbling()) unsupported.emplace_back("simulate_dribbling");
 
   if (!invalid.empty()) {
-    errors.Refuse(codes::kInvalidValue,
-                  "RealismConfigErForce: " + invalid + " must be finite, >= 0 (probabilities <= 1, delays <= 10 s)");
+    errors.Add(codes::kInvalidValue,
+                  "RealismConfigErForce not applied: " + invalid + " must be finite, >= 0 (probabilities <= 1, delays <= 10 s)");
     return;
   }
   if (!unsupported.empty()) {
     std::string list;
     for (const auto& u : unsupported) list += (list.empty() ? "" : ", ") + u;
-    errors.Skip(codes::kRealismFields, "RealismConfigErForce fields not applied: " + list);
+    errors.Add(codes::kRealismFields, "RealismConfigErForce fields not applied: " + list);
   }
   const bool any = e.vision_latency || e.ball_position_noise || e.robot_position_noise ||
                    e.robot_orientation_noise || e.ball_drop || e.robot_drop || e.camera_overlap ||
@@ -183,22 +189,154 @@ void MapErForceRealism(const RealismConfigErForce& r, Errors& errors, std::vecto
   if (any) events.emplace_back(std::move(e));
 }
 
-void MapConfig(const SimulatorConfig& c, Errors& errors, std::vector<Event>& events) {
-  if (c.has_geometry()) errors.Skip(codes::kGeometry, "config.geometry is not supported: the field comes from the world file");
-  if (c.robot_specs_size() > 0)
-    errors.Skip(codes::kRobotSpecs, "config.robot_specs is not supported: robots come from their model files");
-  if (c.has_vision_port())
-    errors.Skip(codes::kVisionPort, "config.vision_port is not supported: set the vision transport's port in the world file");
+// One RobotSpecs → RobotSpecEvent (SI already; wheel angles into the drive's order and sense).
+void MapRobotSpecs(const RobotSpecs& r, const MappingOptions& options, Errors& errors, std::vector<Event>& events) {
+  if (!r.has_id() || !r.id().has_id()) {
+    errors.Add(codes::kMissingField, "a robot_specs entry has no id.id; it was skipped");
+    return;
+  }
+  const std::optional<Team> team = ToTeam(r.id());
+  if (!team) {
+    errors.Add(codes::kInvalidTeam, "robot_specs " + std::to_string(r.id().id()) + ": id.team must be BLUE or YELLOW");
+    return;
+  }
+  if (r.id().id() > kMaxRobotId) {
+    errors.Add(codes::kInvalidRobotId, "robot_specs " + std::string(ToString(*team)) + " " +
+                                           std::to_string(r.id().id()) + ": robot ids are 0..15");
+    return;
+  }
+  const RobotId id{*team, static_cast<int>(r.id().id())};
+  if (!r.IsInitialized()) {
+    errors.Add(codes::kMissingField, "robot_specs of " + Name(id) + " lacks " + r.InitializationErrorString() +
+                                         "; not applied");
+    return;
+  }
+  RobotSpecEvent e;
+  e.robot = id;
+  RobotSpec& spec = e.spec;
+  std::vector<double> values;
+  auto take = [&](bool has, float v, std::optional<double>& into) {
+    if (!has) return;
+    into = v;
+    values.push_back(v);
+  };
+  take(r.has_radius(), r.radius(), spec.radius);
+  take(r.has_height(), r.height(), spec.height);
+  take(r.has_mass(), r.mass(), spec.mass);
+  take(r.has_center_to_dribbler(), r.center_to_dribbler(), spec.center_to_dribbler);
+  take(r.has_max_linear_kick_speed(), r.max_linear_kick_speed(), spec.max_flat_kick_speed);
+  take(r.has_max_chip_kick_speed(), r.max_chip_kick_speed(), spec.max_chip_kick_speed);
+  if (r.has_limits()) {
+    const RobotLimits& l = r.limits();
+    take(l.has_acc_speedup_absolute_max(), l.acc_speedup_absolute_max(), spec.max_acceleration);
+    take(l.has_acc_speedup_angular_max(), l.acc_speedup_angular_max(), spec.max_angular_acceleration);
+    take(l.has_acc_brake_absolute_max(), l.acc_brake_absolute_max(), spec.max_deceleration);
+    take(l.has_acc_brake_angular_max(), l.acc_brake_angular_max(), spec.max_angular_deceleration);
+    take(l.has_vel_absolute_max(), l.vel_absolute_max(), spec.max_speed);
+    take(l.has_vel_angular_max(), l.vel_angular_max(), spec.max_angular_speed);
+  }
+  if (r.has_wheel_angles()) {
+    // The protocol's angles run clockwise from forward, front_right first; the drive's run
+    // counter-clockwise, in its own wheel order (wheel_velocity_order maps one to the other).
+    const RobotWheelAngles& w = r.wheel_angles();
+    const double clockwise[4] = {w.front_right(), w.back_right(), w.back_left(), w.front_left()};
+    if (options.wheel_order.size() != 4) {
+      errors.Add(codes::kUnmappedSpec, "robot_specs of " + Name(id) +
+                                           ": wheel_angles not applied (this world sets no wheel_velocity_order)");
+    } else {
+      std::vector<double> ccw(4, 0.0);
+      for (int i = 0; i < 4; ++i) {
+        double a = std::fmod(-clockwise[i], 2 * M_PI);
+        if (a < 0) a += 2 * M_PI;
+        ccw[static_cast<std::size_t>(options.wheel_order[static_cast<std::size_t>(i)])] = a;
+        values.push_back(clockwise[i]);
+      }
+      spec.wheel_angles = std::move(ccw);
+    }
+  }
+  std::vector<std::string> unknown;
+  for (const google::protobuf::Any& any : r.custom()) {
+    const std::string_view name = LastSegment(any.type_url());
+    if (name != "RobotSpecErForce" && name != "sslsim.RobotSpecErForce") {
+      unknown.emplace_back(name);
+      continue;
+    }
+    RobotSpecErForce erforce;
+    if (!erforce.ParseFromString(any.value())) {
+      errors.Add(codes::kUnreadable, "robot_specs of " + Name(id) + ": RobotSpecErForce does not parse; not applied");
+      return;
+    }
+    take(erforce.has_dribbler_width(), erforce.dribbler_width(), spec.dribbler_width);
+    // shoot_radius: centre to the ball's centre with the ball against the front, i.e. the front
+    // flat plus a ball radius; it sets the front only when center_to_dribbler does not.
+    if (erforce.has_shoot_radius()) {
+      values.push_back(erforce.shoot_radius());
+      const double front = erforce.shoot_radius() - options.ball_radius;
+      if (!spec.center_to_dribbler) {
+        spec.center_to_dribbler = front;
+      } else if (std::abs(*spec.center_to_dribbler - front) > 0.001) {
+        errors.Add(codes::kUnmappedSpec, "robot_specs of " + Name(id) + ": RobotSpecErForce.shoot_radius " +
+                                             std::to_string(erforce.shoot_radius()) +
+                                             " m not applied: center_to_dribbler sets the front");
+      }
+    }
+  }
+  if (!unknown.empty()) {
+    std::string list;
+    for (const auto& u : unknown) list += (list.empty() ? "'" : ", '") + u + "'";
+    errors.Add(codes::kUnmappedSpec, "robot_specs of " + Name(id) + ": custom spec types not known: " + list +
+                                         " (RobotSpecErForce is)");
+  }
+  for (double v : values) {
+    if (!std::isfinite(v)) {
+      errors.Add(codes::kNonFinite, "robot_specs of " + Name(id) + " has a NaN or infinite value; not applied");
+      return;
+    }
+  }
+  events.emplace_back(std::move(e));
+}
+
+void MapGeometry(const SSL_GeometryData& g, Errors& errors, std::vector<Event>& events) {
+  const SSL_GeometryFieldSize& f = g.field();
+  if (!g.has_field() || !f.IsInitialized()) {
+    errors.Add(codes::kMissingField, "config.geometry lacks field sizes (" + f.InitializationErrorString() +
+                                         "); the field was not changed");
+    return;
+  }
+  FieldEvent e;
+  e.field_length = transport::MmToMetres(f.field_length());
+  e.field_width = transport::MmToMetres(f.field_width());
+  e.goal_width = transport::MmToMetres(f.goal_width());
+  e.goal_depth = transport::MmToMetres(f.goal_depth());
+  e.boundary_width = transport::MmToMetres(f.boundary_width());
+  if (f.has_penalty_area_depth()) e.penalty_area_depth = transport::MmToMetres(f.penalty_area_depth());
+  if (f.has_penalty_area_width()) e.penalty_area_width = transport::MmToMetres(f.penalty_area_width());
+  events.emplace_back(std::move(e));
+}
+
+void MapConfig(const SimulatorConfig& c, const MappingOptions& options, Errors& errors, std::vector<Event>& events) {
+  if (c.has_geometry()) MapGeometry(c.geometry(), errors, events);
+  for (const RobotSpecs& r : c.robot_specs()) MapRobotSpecs(r, options, errors, events);
+  if (c.has_vision_port()) {
+    if (c.vision_port() == 0 || c.vision_port() > 65535) {
+      errors.Add(codes::kInvalidValue, "vision_port " + std::to_string(c.vision_port()) + " is not a port (1..65535)");
+    } else {
+      TransportSettingEvent e;
+      e.name = "vision_port";
+      e.value = c.vision_port();
+      events.emplace_back(std::move(e));
+    }
+  }
   for (const google::protobuf::Any& any : c.realism_config().custom()) {
     const std::string_view name = LastSegment(any.type_url());
     if (name != "RealismConfigErForce" && name != "sslsim.RealismConfigErForce") {
-      errors.Skip(codes::kUnknownRealism, "realism_config type '" + std::string(name) +
+      errors.Add(codes::kUnknownRealism, "realism_config type '" + std::string(name) +
                                               "' is not known (RealismConfigErForce is)");
       continue;
     }
     RealismConfigErForce r;
     if (!r.ParseFromString(any.value())) {
-      errors.Refuse(codes::kUnreadable, "realism_config RealismConfigErForce does not parse");
+      errors.Add(codes::kUnreadable, "realism_config RealismConfigErForce does not parse");
       continue;
     }
     MapErForceRealism(r, errors, events);
@@ -219,7 +357,7 @@ std::optional<MoveCommand> MapMove(const RobotMoveCommand& m, const MappingOptio
     case RobotMoveCommand::kWheelVelocity: {
       const MoveWheelVelocity& w = m.wheel_velocity();
       if (options.wheel_order.size() != 4) {
-        errors.Skip(codes::kWheelVelocity, "wheel_velocity is switched off in this world (move of " + Name(id) +
+        errors.Add(codes::kWheelVelocity, "wheel_velocity is switched off in this world (move of " + Name(id) +
                                                " not applied)");
         return std::nullopt;
       }
@@ -232,7 +370,7 @@ std::optional<MoveCommand> MapMove(const RobotMoveCommand& m, const MappingOptio
     }
     case RobotMoveCommand::COMMAND_NOT_SET: break;
   }
-  errors.Refuse(codes::kMissingField, "move_command of " + Name(id) + " names no command");
+  errors.Add(codes::kMissingField, "move_command of " + Name(id) + " names no command; its command was skipped");
   return std::nullopt;
 }
 
@@ -257,18 +395,18 @@ bool FiniteMove(const RobotMoveCommand& m) {
 
 }  // namespace
 
-Mapped MapSimulatorCommand(const SimulatorCommand& command, const RobotExists& exists,
+Mapped MapSimulatorCommand(const SimulatorCommand& command, const RobotLookup& robots,
                            const MappingOptions& options) {
   Mapped out;
   Errors errors(out);
   if (command.has_control()) {
     const SimulatorControl& c = command.control();
     if (c.has_teleport_ball()) MapTeleportBall(c.teleport_ball(), options, errors, out.events);
-    for (const TeleportRobot& t : c.teleport_robot()) MapTeleportRobot(t, exists, errors, out.events);
+    for (const TeleportRobot& t : c.teleport_robot()) MapTeleportRobot(t, robots, errors, out.events);
     if (c.has_simulation_speed()) {
       const double s = c.simulation_speed();
       if (!std::isfinite(s) || s <= 0 || s > 1000) {
-        errors.Refuse(codes::kInvalidValue, "simulation_speed must be in (0, 1000]");
+        errors.Add(codes::kInvalidValue, "simulation_speed must be in (0, 1000]; the speed was not changed");
       } else {
         ClockEvent e;
         e.action = ClockEvent::Action::kSetSpeed;
@@ -277,43 +415,81 @@ Mapped MapSimulatorCommand(const SimulatorCommand& command, const RobotExists& e
       }
     }
   }
-  if (command.has_config()) MapConfig(command.config(), errors, out.events);
-  if (out.refused) out.events.clear();
+  if (command.has_config()) MapConfig(command.config(), options, errors, out.events);
   return out;
 }
 
-MappedRobotControl MapRobotControl(const RobotControl& control, Team team, const RobotExists& exists,
+MappedRobotControl MapRobotControl(const RobotControl& control, Team team, const RobotLookup& robots,
                                    const MappingOptions& options) {
   MappedRobotControl out;
   Errors errors(out);
   for (const RobotCommand& rc : control.robot_commands()) {
+    if (!rc.has_id()) {
+      errors.Add(codes::kMissingField, "a robot command has no id; it was skipped");
+      continue;
+    }
     const RobotId id{team, static_cast<int>(rc.id())};
     bool named = false;
     for (std::uint32_t seen : out.commanded_ids) named = named || seen == rc.id();
     if (!named) out.commanded_ids.push_back(rc.id());
-    if (rc.id() > 1000 || !exists(id)) {
-      errors.Refuse(codes::kUnknownRobot, "no robot " + Name(id) + " in this world");
+    if (rc.id() > kMaxRobotId || robots(id) != Presence::kOnField) {
+      errors.Add(codes::kUnknownRobot, "no robot " + Name(id) + " on the field; its command was skipped");
+      continue;
+    }
+    if (!rc.IsInitialized()) {
+      errors.Add(codes::kMissingField, "command for " + Name(id) + " lacks " + rc.InitializationErrorString() +
+                                           "; it was skipped");
       continue;
     }
     if (!AllFinite({rc.kick_speed(), rc.kick_angle(), rc.dribbler_speed()}) ||
         (rc.has_move_command() && !FiniteMove(rc.move_command()))) {
-      errors.Refuse(codes::kNonFinite, "command for " + Name(id) + " has a NaN or infinite value");
+      errors.Add(codes::kNonFinite, "command for " + Name(id) + " has a NaN or infinite value; it was skipped");
+      continue;
+    }
+    if (rc.has_kick_speed() && rc.kick_speed() != 0.0f &&
+        (rc.kick_speed() < 0 || rc.kick_angle() < 0 || rc.kick_angle() >= 90)) {
+      errors.Add(codes::kInvalidValue, "kick of " + Name(id) +
+                                           ": kick_speed must be >= 0 and kick_angle in [0, 90) degrees; its command was skipped");
       continue;
     }
     CommandEvent e;
     e.robot = id;
     if (rc.has_move_command()) e.move = MapMove(rc.move_command(), options, id, errors);
     if (rc.has_kick_speed() && rc.kick_speed() != 0.0f) {
-      if (rc.kick_speed() < 0 || rc.kick_angle() < 0 || rc.kick_angle() >= 90) {
-        errors.Refuse(codes::kInvalidValue, "kick of " + Name(id) + ": kick_speed must be >= 0 and kick_angle in [0, 90) degrees");
-        continue;
-      }
       e.kick = KickCommand{rc.kick_speed(), transport::DegToRad(rc.kick_angle())};
     }
     if (rc.has_dribbler_speed()) e.dribbler_speed = transport::RpmToRadPerS(rc.dribbler_speed());
     if (e.move || e.kick || e.dribbler_speed) out.events.emplace_back(std::move(e));
   }
-  if (out.refused) out.events.clear();
+  return out;
+}
+
+bool WantsAnswer(const Event& event) {
+  if (const auto* p = std::get_if<PositionEvent>(&event)) return !p->target.is_ball && p->present && *p->present;
+  return std::holds_alternative<RobotSpecEvent>(event) || std::holds_alternative<FieldEvent>(event) ||
+         std::holds_alternative<TransportSettingEvent>(event);
+}
+
+std::vector<WireError> AnswerErrors(const Event& event, const EventAnswer& answer) {
+  const char* code = codes::kRobotNotBuilt;
+  std::string what = "TeleportRobot";
+  if (const auto* s = std::get_if<RobotSpecEvent>(&event)) {
+    code = codes::kInvalidSpec;
+    what = "robot_specs of " + Name(s->robot);
+  } else if (std::holds_alternative<FieldEvent>(event)) {
+    code = codes::kGeometry;
+    what = "geometry";
+  } else if (std::holds_alternative<TransportSettingEvent>(event)) {
+    code = codes::kVisionPort;
+    what = "vision_port";
+  }
+  std::vector<WireError> out;
+  for (const std::string& e : answer.errors) out.push_back({code, what + ": " + e});
+  if (!answer.unapplied.empty()) {
+    std::string list;
+    for (const std::string& u : answer.unapplied) list += (list.empty() ? "" : "; ") + u;
+    out.push_back({codes::kUnmappedSpec, what + ": not applied: " + list});
+  }
   return out;
 }
 
@@ -323,7 +499,7 @@ RobotControlResponse BuildRobotControlResponse(const std::vector<std::uint32_t>&
   RobotControlResponse r;
   for (std::uint32_t id : ids) {
     const std::optional<bool> touching =
-        id > 1000 ? std::nullopt : contact(RobotId{team, static_cast<int>(id)});
+        id > kMaxRobotId ? std::nullopt : contact(RobotId{team, static_cast<int>(id)});
     if (!touching) continue;
     RobotFeedback* f = r.add_feedback();
     f->set_id(id);
@@ -377,10 +553,6 @@ std::optional<WireError> ParseMessage(const void* data, std::size_t size, std::s
   }
   if (!message.ParsePartialFromArray(data, static_cast<int>(size))) {
     return WireError{codes::kUnreadable, "not a " + message.GetTypeName() + " (" + std::to_string(size) + " bytes)"};
-  }
-  if (!message.IsInitialized()) {
-    return WireError{codes::kMissingField, message.GetTypeName() + " lacks required fields: " +
-                                               message.InitializationErrorString()};
   }
   return std::nullopt;
 }

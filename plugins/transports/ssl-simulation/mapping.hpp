@@ -42,14 +42,21 @@ struct MappingOptions {
   double ball_radius = 0.0215;  ///< m, for `roll`
 };
 
-/// Tells whether a robot exists in the world.
-using RobotExists = std::function<bool(const RobotId&)>;
+/// Where a robot is.
+enum class Presence {
+  kAbsent,    ///< not in the world
+  kOffField,  ///< in the world, taken off the field
+  kOnField,   ///< on the field
+};
 
-/// What one message turns into. When a message is refused (`refused`), `events` is empty.
+/// Tells where a robot is.
+using RobotLookup = std::function<Presence(const RobotId&)>;
+
+/// What one message turns into: the events of its valid items, one error per invalid item
+/// (that item is skipped; the rest applies, as the protocol intends).
 struct Mapped {
   std::vector<Event> events;      ///< to post, in order
   std::vector<WireError> errors;  ///< to send back
-  bool refused = false;           ///< a validation error: nothing of the message applies
 };
 
 /// The commands of one RobotControl, with the robot ids it named.
@@ -58,17 +65,24 @@ struct MappedRobotControl : Mapped {
 };
 
 /// SimulatorCommand → position, clock and realism events.
-Mapped MapSimulatorCommand(const SimulatorCommand& command, const RobotExists& exists,
+Mapped MapSimulatorCommand(const SimulatorCommand& command, const RobotLookup& robots,
                            const MappingOptions& options);
 
 /// RobotControl for `team` (from the port or the sync configuration) → command events.
-MappedRobotControl MapRobotControl(const RobotControl& control, Team team, const RobotExists& exists,
+MappedRobotControl MapRobotControl(const RobotControl& control, Team team, const RobotLookup& robots,
                                    const MappingOptions& options);
+
+/// True for the events whose answer belongs in the reply (robots coming on, robot specs, the
+/// field, the vision port): the transport asks the world for it (EventReply).
+bool WantsAnswer(const Event& event);
+
+/// The SimulatorErrors of the world's answer to such an event, each with its stable code.
+std::vector<WireError> AnswerErrors(const Event& event, const EventAnswer& answer);
 
 /// The state one robot's feedback needs; nullopt when the robot is unknown.
 using ContactLookup = std::function<std::optional<bool>(const RobotId&)>;
 
-/// Feedback for each commanded robot that exists (dribbler_ball_contact), plus the errors.
+/// Feedback for each commanded robot on the field (dribbler_ball_contact), plus the errors.
 RobotControlResponse BuildRobotControlResponse(const std::vector<std::uint32_t>& ids, Team team,
                                                const ContactLookup& contact,
                                                const std::vector<WireError>& errors);
@@ -80,8 +94,9 @@ void AppendErrors(const std::vector<WireError>& errors,
 /// One camera frame as an SSL_DetectionFrame: mm, and seconds of simulated time.
 SSL_DetectionFrame ToDetectionFrame(const VisionFrame& frame);
 
-/// Parses `size` bytes into `message`; an error when larger than `max_size`, unparseable or
-/// missing a required field (UBERSIM_OVERSIZED, UBERSIM_UNREADABLE, UBERSIM_MISSING_FIELD).
+/// Parses `size` bytes into `message`; an error when larger than `max_size` or unparseable
+/// (UBERSIM_OVERSIZED, UBERSIM_UNREADABLE): nothing of such a message can be trusted. Required
+/// fields left unset are the items' business (each such item is refused on its own).
 std::optional<WireError> ParseMessage(const void* data, std::size_t size, std::size_t max_size,
                                       google::protobuf::MessageLite& message);
 

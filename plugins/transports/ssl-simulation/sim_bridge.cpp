@@ -14,7 +14,7 @@ void SimBridge::OnPublish(const WorldSnapshot& snapshot) {
   std::lock_guard lock(mutex_);
   robots_.resize(snapshot.robots.size());
   for (std::size_t i = 0; i < snapshot.robots.size(); ++i) {
-    robots_[i] = RobotEntry{snapshot.robots[i].id, snapshot.robots[i].dribbler_ball_contact};
+    robots_[i] = RobotEntry{snapshot.robots[i].id, snapshot.robots[i].present, snapshot.robots[i].dribbler_ball_contact};
   }
   has_state_ = true;
   ball_radius_ = snapshot.ball.radius;
@@ -33,14 +33,29 @@ bool SimBridge::HasState() const {
   return has_state_;
 }
 
-bool SimBridge::Exists(const RobotId& id) const { return Contact(id).has_value(); }
+const SimBridge::RobotEntry* SimBridge::Find(const RobotId& id) const {
+  for (const RobotEntry& r : robots_) {
+    if (r.id == id) return &r;
+  }
+  return nullptr;
+}
+
+bool SimBridge::Exists(const RobotId& id) const {
+  std::lock_guard lock(mutex_);
+  return Find(id) != nullptr;
+}
+
+bool SimBridge::OnField(const RobotId& id) const {
+  std::lock_guard lock(mutex_);
+  const RobotEntry* r = Find(id);
+  return r && r->present;
+}
 
 std::optional<bool> SimBridge::Contact(const RobotId& id) const {
   std::lock_guard lock(mutex_);
-  for (const RobotEntry& r : robots_) {
-    if (r.id == id) return r.contact;
-  }
-  return std::nullopt;
+  const RobotEntry* r = Find(id);
+  if (!r || !r->present) return std::nullopt;
+  return r->contact;
 }
 
 double SimBridge::BallRadius() const {

@@ -36,7 +36,9 @@ class SimBridge {
   bool HasState() const;
   /// Whether the robot exists (false before any state).
   bool Exists(const RobotId& id) const;
-  /// The robot's dribbler contact; nullopt when it does not exist or no state is known yet.
+  /// Whether the robot is on the field (false before any state).
+  bool OnField(const RobotId& id) const;
+  /// The robot's dribbler contact; nullopt when it is not on the field or no state is known yet.
   std::optional<bool> Contact(const RobotId& id) const;
   /// Ball radius, m (the kernel default until a state is known).
   double BallRadius() const;
@@ -54,8 +56,10 @@ class SimBridge {
  private:
   struct RobotEntry {
     RobotId id;
+    bool present = true;
     bool contact = false;
   };
+  const RobotEntry* Find(const RobotId& id) const;  // under mutex_
   mutable std::mutex mutex_;
   std::condition_variable done_;
   std::vector<RobotEntry> robots_;

@@ -32,6 +32,9 @@ namespace ubersim::ssl_simulation {
 namespace {
 
 using namespace std::chrono_literals;
+
+// How long a reply waits for the world's answer to a change it asked for (a robot coming on, specs).
+constexpr auto kAnswerTimeout = 2s;
 using transport::DropReason;
 using transport::RejectLog;
 using transport::UdpEndpoint;
@@ -185,22 +188,27 @@ class SslSimulationTransport final : public Transport {
     return r.SerializeAsString();
   }
 
-  // Whether a robot exists. Before the first step there is no published state, so ask the kernel
+  // Where a robot is. Before the first step there is no published state, so ask the kernel
   // (queries are answered even while paused); bounded, so a stalled world cannot hang us.
-  bool RobotExists(const RobotId& id) {
-    if (bridge_.HasState()) return bridge_.Exists(id);
-    auto answer = std::make_shared<std::promise<bool>>();
-    std::future<bool> found = answer->get_future();
+  Presence Where(const RobotId& id) {
+    if (bridge_.HasState()) {
+      if (!bridge_.Exists(id)) return Presence::kAbsent;
+      return bridge_.OnField(id) ? Presence::kOnField : Presence::kOffField;
+    }
+    auto answer = std::make_shared<std::promise<Presence>>();
+    std::future<Presence> found = answer->get_future();
     QueryEvent q;
     q.target = Target::Robot(id);
-    q.reply = [answer](const ObjectState& s) { answer->set_value(s.found); };
+    q.reply = [answer](const ObjectState& s) {
+      answer->set_value(!s.found ? Presence::kAbsent : s.present ? Presence::kOnField : Presence::kOffField);
+    };
     context_->Events().Post(std::move(q));
-    return found.wait_for(500ms) == std::future_status::ready && found.get();
+    return found.wait_for(500ms) == std::future_status::ready ? found.get() : Presence::kAbsent;
   }
 
   std::optional<bool> Contact(const RobotId& id) {
     if (bridge_.HasState()) return bridge_.Contact(id);
-    return RobotExists(id) ? std::optional<bool>(false) : std::nullopt;
+    return Where(id) == Presence::kOnField ? std::optional<bool>(false) : std::nullopt;
   }
 
   MappingOptions Options() const {
@@ -209,8 +217,38 @@ class SslSimulationTransport final : public Transport {
     return o;
   }
 
-  void Post(std::vector<Event>& events) {
-    for (Event& e : events) context_->Events().Post(std::move(e));
+  // Posts the events; for those whose answer belongs in the reply (robots coming on, specs, the
+  // field, the vision port) waits for the world's answer and appends its errors. Bounded: a
+  // world that does not answer in time is said so in the reply.
+  void Post(std::vector<Event>& events, std::vector<WireError>& errors) {
+    std::vector<std::pair<Event, std::future<EventAnswer>>> waiting;
+    for (Event& e : events) {
+      if (!WantsAnswer(e)) {
+        context_->Events().Post(std::move(e));
+        continue;
+      }
+      auto promise = std::make_shared<std::promise<EventAnswer>>();
+      std::future<EventAnswer> answer = promise->get_future();
+      std::visit(
+          [&](auto& ev) {
+            if constexpr (requires { ev.reply = EventReply(); }) {
+              ev.reply = [promise](const EventAnswer& a) { promise->set_value(a); };
+            }
+          },
+          e);
+      Event copy = e;  // what the answer is about (its reply is never called twice: it is not posted)
+      context_->Events().Post(std::move(e));
+      waiting.emplace_back(std::move(copy), std::move(answer));
+    }
+    const auto deadline = std::chrono::steady_clock::now() + kAnswerTimeout;
+    for (auto& [event, answer] : waiting) {
+      if (answer.wait_until(deadline) != std::future_status::ready) {
+        errors.push_back({codes::kRobotNotBuilt, "the world did not answer within 2 s (is it stopped?); the change may "
+                                                 "still apply"});
+        continue;
+      }
+      for (WireError& w : AnswerErrors(event, answer.get())) errors.push_back(std::move(w));
+    }
   }
 
   void CountRefused(const char* port, const std::vector<WireError>& errors) {
@@ -225,9 +263,9 @@ class SslSimulationTransport final : public Transport {
       return Refusal<SimulatorResponse>(*e);
     }
     SimulatorResponse response;
-    Mapped m = MapSimulatorCommand(command, [this](const RobotId& id) { return RobotExists(id); }, Options());
-    if (m.refused) CountRefused("control", m.errors);
-    Post(m.events);
+    Mapped m = MapSimulatorCommand(command, [this](const RobotId& id) { return Where(id); }, Options());
+    Post(m.events, m.errors);
+    CountRefused("control", m.errors);
     AppendErrors(m.errors, response.mutable_errors());
     // Every datagram gets an answer, even an empty one, so a client knows it arrived.
     return response.SerializeAsString();
@@ -240,10 +278,9 @@ class SslSimulationTransport final : public Transport {
       CountRefused(port, {*e});
       return Refusal<RobotControlResponse>(*e);
     }
-    MappedRobotControl m = MapRobotControl(control, team, [this](const RobotId& id) { return RobotExists(id); },
-                                           Options());
-    if (m.refused) CountRefused(port, m.errors);
-    Post(m.events);
+    MappedRobotControl m = MapRobotControl(control, team, [this](const RobotId& id) { return Where(id); }, Options());
+    CountRefused(port, m.errors);
+    Post(m.events, m.errors);
     return BuildRobotControlResponse(m.commanded_ids, team, [this](const RobotId& id) { return Contact(id); },
                                      m.errors)
         .SerializeAsString();
@@ -261,15 +298,15 @@ class SslSimulationTransport final : public Transport {
       AppendErrors(errors, response.mutable_robot_control_response()->mutable_errors());
       return response;
     }
-    auto exists = [this](const RobotId& id) { return RobotExists(id); };
+    auto where = [this](const RobotId& id) { return Where(id); };
     if (request.has_simulator_command()) {
-      Mapped m = MapSimulatorCommand(request.simulator_command(), exists, Options());
-      Post(m.events);
+      Mapped m = MapSimulatorCommand(request.simulator_command(), where, Options());
+      Post(m.events, m.errors);
       errors.insert(errors.end(), m.errors.begin(), m.errors.end());
     }
     if (request.has_robot_control()) {
-      MappedRobotControl m = MapRobotControl(request.robot_control(), sync_.team, exists, Options());
-      Post(m.events);
+      MappedRobotControl m = MapRobotControl(request.robot_control(), sync_.team, where, Options());
+      Post(m.events, m.errors);
       ids = m.commanded_ids;
       errors.insert(errors.end(), m.errors.begin(), m.errors.end());
     }

@@ -93,6 +93,7 @@ class SslVisionTransport final : public ubersim::Transport {
     geometry_.cameras = ctx.Cameras();
     geometry_.intrinsics = ReadIntrinsics(p);
     geometry_.models = ReadBallModels(p);
+    options_ = o;
     sender_ = std::make_unique<MulticastSender>(o);
     send_log_ = std::make_unique<RejectLog>(ctx.Logger(), "vision packet not sent");
     WarnIfUnreachable(ctx.Logger());
@@ -135,6 +136,22 @@ class SslVisionTransport final : public ubersim::Transport {
         ubersim::ssl_vision::DetectionPacket(frame, *clock_, geometry_.intrinsics, camera, heights_);
     packet.SerializeToString(&buffer_);
     Send(buffer_);
+  }
+
+  // The simulation protocol's vision_port: the same packets from now on to the new port.
+  bool OnSetting(const std::string& name, std::int64_t value) override {
+    if (name != "vision_port") return false;
+    if (value < 1 || value > 65535) throw ubersim::PluginError("vision_port " + std::to_string(value) + " is not a port");
+    MulticastSender::Options o = options_;
+    o.port = static_cast<std::uint16_t>(value);
+    auto next = std::make_unique<MulticastSender>(o);  // throws PluginError-worthy runtime_error on failure
+    {
+      std::lock_guard lock(send_mutex_);
+      std::swap(sender_, next);
+    }
+    options_ = o;
+    SendGeometry();
+    return true;
   }
 
   std::string Endpoint() const override { return sender_ ? sender_->Describe() : std::string(); }
@@ -191,6 +208,7 @@ class SslVisionTransport final : public ubersim::Transport {
   }
 
   void Send(const std::string& bytes) {
+    std::lock_guard lock(send_mutex_);
     if (!sender_->Send(Bytes(bytes))) send_log_->Reject(sender_->LastError());
   }
 
@@ -211,11 +229,13 @@ class SslVisionTransport final : public ubersim::Transport {
   bool seen_world_ = false;
   std::int64_t last_sim_ns_ = 0;
   std::string buffer_;
+  MulticastSender::Options options_;
   // Shared with the geometry thread.
-  std::unique_ptr<MulticastSender> sender_;   // Send is thread-safe
+  std::unique_ptr<MulticastSender> sender_;   // Send is thread-safe; replaced under mutex_
   std::unique_ptr<RejectLog> send_log_;       // thread-safe
   std::chrono::duration<double> interval_{3.0};
   std::mutex mutex_;
+  std::mutex send_mutex_;  // sender_ is swapped (vision_port) while the geometry thread may send
   std::condition_variable wake_;
   bool stopping_ = false;
   std::string geometry_bytes_;

@@ -114,6 +114,12 @@ class CollisionManager {
   void SetSweptBallStep(double dt) { swept_ball_step_ = dt; }
   /// Removes the contact joints of the last step.
   void ClearContacts();
+  /// Geometries came into the scene after the first step (a robot came on): they are filed as
+  /// they come; what the swept ball test gathered of the scene is gathered again.
+  void GeometriesAdded();
+  /// Geometries left the scene (a robot was taken out): every geometry is filed anew and every
+  /// cache that may name a destroyed one is dropped.
+  void GeometriesRemoved();
   /// Counters of the last Collide().
   const CollisionStats& stats() const { return stats_; }
   /// How many pairs' resolved surfaces are cached now (bounded, however long the run).

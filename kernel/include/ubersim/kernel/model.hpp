@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -76,6 +77,14 @@ struct RobotModel {
   std::optional<ComponentModel> drive;     ///< the drive
   std::optional<ComponentModel> dribbler;  ///< optional dribbler
   std::optional<ComponentModel> kicker;    ///< optional kicker
+  ParamView source;                        ///< the file's tree as read (robot specs edit a copy)
+};
+
+/// What a RobotSpec makes of a robot model (ModelLoader::ApplySpec).
+struct SpecOutcome {
+  std::shared_ptr<const RobotModel> model;  ///< the model with the spec over it; null when a value was refused
+  std::vector<std::string> errors;          ///< one per refused value: "mass -1 kg: …"
+  std::vector<std::string> unmapped;        ///< the spec's fields the model has no place for
 };
 
 /// One robot placed in a world.
@@ -144,6 +153,9 @@ struct WorldModel {
   /// What a plugin fault does: "stop" (the default: the world stops after the step, state
   /// saved) or "disable" (the plugin is switched off and the world carries on); fault.hpp.
   std::string on_plugin_fault = "stop";
+  /// The robot model of each team's robots that come on while the world runs (`teams:`; else
+  /// the model of the team's first robot, else of the other team's): [blue, yellow], may be null.
+  std::array<std::shared_ptr<const RobotModel>, 2> team_models;
   /// Every transport on loopback only (`local_only: true`, `ubersim run --local-only`).
   bool local_only = false;
 };
@@ -169,6 +181,12 @@ class ModelLoader {
   std::shared_ptr<const BallModel> LoadBall(const std::filesystem::path& file) const;
   /// Reads a robot file (checking its plugins' parameter blocks).
   std::shared_ptr<const RobotModel> LoadRobot(const std::filesystem::path& file) const;
+  /// `base` with `spec` over it, checked as a model file is: each value alone (one error per
+  /// refused value), then all together. Body values go to the body block; the others to the
+  /// plugin parameters whose schema names the field (`"robot_spec": "max_speed"`); a field
+  /// with no such place is listed in `unmapped`. The model keeps base's file; its name says it
+  /// carries robot specs.
+  SpecOutcome ApplySpec(const RobotModel& base, const RobotSpec& spec) const;
   /// Reads any model file by its `kind:` and validates it fully (for `ubersim validate`);
   /// returns the kind.
   std::string Validate(const std::filesystem::path& file) const;

@@ -187,6 +187,9 @@ class NodeImpl final : public SceneNode {
   const std::vector<std::unique_ptr<JointImpl>>& joints() const { return joints_; }
   /// Typed child lookup.
   NodeImpl* FindChildNode(std::string_view name) const;
+  /// Destroys `child` and its subtree (a robot leaving the world); nothing when it is not a
+  /// child of this node. The collision manager must be told (CollisionManager::GeometriesRemoved).
+  void RemoveChild(const NodeImpl& child);
   /// Typed parent.
   NodeImpl* parent() const { return parent_; }
   /// Marks this node as one robot's root: geometries added to its subtree afterwards belong to it.

@@ -60,6 +60,7 @@ struct SavedRobot {
   RobotId id;                     ///< team and id
   bool present = true;            ///< on the field
   std::vector<SavedPart> parts;   ///< in the robot's order (drive, dribbler, kicker)
+  std::string model_file;         ///< the robot file it was built from, before robot specs ("" in older snapshots)
 };
 
 /// A model file the world was built from, and a digest of its bytes.
@@ -95,6 +96,7 @@ struct SavedState {
   PerceptionState perception;         ///< cameras' schedule, frames in flight, noise generator
   RadioState radio;                   ///< commands in flight, loss generator
   std::vector<PluginFault> faults;    ///< every fault so far
+  std::vector<std::pair<RobotId, RobotSpec>> robot_specs;  ///< robot specs announced while running
 };
 
 /// The snapshot file's bytes: a checked envelope (magic, format version, CRC-32) around the

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -143,6 +144,24 @@ class World {
   void Apply(const TransportSettingEvent& e);
   ObjectState Query(const Target& t) const;
   Robot* FindRobot(const RobotId& id) const;
+  // Builds a robot under its team's node from its base model with its announced spec, and adds
+  // it to the roster; a robot that fails to build leaves nothing behind (and throws).
+  Robot& AddRobot(const RobotPlacement& placement);
+  // Takes a robot out of the world: its parts, then its bodies; and out of the roster.
+  void RemoveRobot(const RobotId& id);
+  // After robots came or went: the collision manager, the repair records, the body list.
+  void RobotsChanged(bool removed);
+  // A robot that is not in the world comes on (PositionEvent with present: true); null, with
+  // the reasons in `answer`, when it cannot.
+  Robot* ComeOn(const PositionEvent& e, EventAnswer& answer);
+  // Rebuilds a robot from its (new) model where it is, as it moves; on failure as it was.
+  void RebuildRobot(Robot& robot, EventAnswer& answer);
+  // The model `placement`'s robot is built from: its base with the spec announced for it.
+  std::shared_ptr<const RobotModel> EffectiveModel(const RobotPlacement& placement);
+  // The base model of robot `id`: its roster entry's, else its team's (may be null).
+  std::shared_ptr<const RobotModel> BaseModel(const RobotId& id) const;
+  // Applies robot specs to models (the kernel's schemas and the registry's plugin schemas).
+  const ModelLoader& Loader();
 
   WorldModel model_;
   PluginRegistry& registry_;
@@ -161,6 +180,16 @@ class World {
   std::vector<char> limbs_;                   // per body of body_ids_: FindLimbs
   std::uint64_t body_ids_for_ = 0;             // body_ids_ lists this many bodies created
   std::vector<std::unique_ptr<Robot>> robots_;
+  // What Build builds, in creation order, each with its base model: the world file's robots,
+  // then those that came on while running (a rebuilt robot goes to the end, as its bodies do).
+  std::vector<RobotPlacement> roster_;
+  // Robot specs announced while running, by robot: kept over a reset (they describe a team's
+  // robots), saved in snapshots. spec_models_ caches their models, with the base they were made from.
+  std::map<std::pair<int, int>, RobotSpec> specs_;
+  std::map<std::pair<int, int>, std::pair<std::shared_ptr<const RobotModel>, std::shared_ptr<const RobotModel>>>
+      spec_models_;
+  std::unique_ptr<ModelLoader> loader_;
+  NodeImpl* team_nodes_[2] = {nullptr, nullptr};  // blue, yellow
   std::vector<std::unique_ptr<TransportHost>> transports_;
   FieldGeometry field_geometry_;
   EventQueue events_;
