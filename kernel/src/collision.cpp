@@ -237,17 +237,13 @@ CollisionManager::~CollisionManager() {
   graph_.SetGeomListener(nullptr, nullptr);
 }
 
-void CollisionManager::GeometriesAdded() {
-  balls_found_ = false;
-  balls_.clear();
-  sweep_targets_.clear();
-}
-
-void CollisionManager::GeometriesRemoved() {
+void CollisionManager::Refile() {
   // Destroyed geometries already left their ODE spaces (dGeomDestroy); the lists beside them
   // and the caches keyed by their addresses did not.
   SetBroadphase(broadphase_);
-  GeometriesAdded();
+  balls_found_ = false;
+  balls_.clear();
+  sweep_targets_.clear();
   surfaces_.clear();
   ball_touching_.clear();
 }

@@ -247,6 +247,12 @@ void PutState(const SavedState& s, pb::WorldState& out) {
     o->set_id(r.id.id);
     o->set_present(r.present);
     o->set_model_file(r.model_file);
+    if (r.built_at) {
+      o->set_has_built_at(true);
+      o->set_built_x((*r.built_at)[0]);
+      o->set_built_y((*r.built_at)[1]);
+      o->set_built_yaw((*r.built_at)[2]);
+    }
     for (const SavedPart& p : r.parts) {
       pb::Part* q = o->add_parts();
       q->set_kind(static_cast<std::uint32_t>(p.kind));
@@ -348,6 +354,7 @@ SavedState GetState(const pb::WorldState& in) {
     o.id = RobotId{TeamOf(r.team(), "a robot"), r.id()};
     o.present = r.present();
     o.model_file = r.model_file();
+    if (r.has_built_at()) o.built_at = std::array<double, 3>{r.built_x(), r.built_y(), r.built_yaw()};
     for (const pb::Part& p : r.parts()) {
       o.parts.push_back(SavedPart{KindOf(p.kind(), "a robot part"), p.plugin(), p.version(), p.failed(), p.state()});
     }

@@ -239,6 +239,7 @@ void World::Build() {
     p.model = EffectiveModel(base);
     robots_.push_back(std::make_unique<Robot>(p, p.id.team == Team::kBlue ? blue : yellow, registry_, log_, services));
   }
+  collision_->Refile();  // tree order, as after a robot comes or goes
   last_good_.Track(scene_->Root());
 }
 
@@ -285,11 +286,11 @@ Robot& World::AddRobot(const RobotPlacement& base) {
   } catch (...) {
     // What the robot built before it threw leaves with its node.
     if (NodeImpl* n = team.FindChildNode(std::to_string(p.id.id))) team.RemoveChild(*n);
-    RobotsChanged(true);
+    RobotsChanged();
     throw;
   }
   roster_.push_back(base);
-  RobotsChanged(false);
+  RobotsChanged();
   return *robots_.back();
 }
 
@@ -300,15 +301,11 @@ void World::RemoveRobot(const RobotId& id) {
   robots_.erase(it);  // its parts (plugin code) go while its bodies still exist
   node.parent()->RemoveChild(node);
   std::erase_if(roster_, [&](const RobotPlacement& p) { return p.id == id; });
-  RobotsChanged(true);
+  RobotsChanged();
 }
 
-void World::RobotsChanged(bool removed) {
-  if (removed) {
-    collision_->GeometriesRemoved();
-  } else {
-    collision_->GeometriesAdded();
-  }
+void World::RobotsChanged() {
+  collision_->Refile();
   last_good_.Track(scene_->Root());
   body_ids_for_ = 0;  // the step's body list is made again
 }
@@ -470,9 +467,13 @@ void World::Apply(const PositionEvent& e) {
   };
   Robot* r = FindRobot(e.target.robot);
   const bool on = e.present && *e.present;
-  if (!r || (!r->present() && !on)) {
-    // Not on the field and not asked to come on: nothing to move, as on grSim.
-    if (!r && on) r = ComeOn(e, answer);
+  if (r && !r->present() && !on) {
+    reply();  // off the field and not asked back on: nothing to move, as on grSim
+    return;
+  }
+  if (!r) {
+    // Not in the world: it comes on when asked to; otherwise nothing to move.
+    if (on) r = ComeOn(e, answer);
     if (!r) {
       if (!answer.errors.empty()) {
         ++event_counters_.rejected;

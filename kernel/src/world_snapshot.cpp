@@ -105,7 +105,9 @@ SavedState World::Save() const {
     saved.id = r->id();
     saved.present = r->present();
     for (const RobotPlacement& p : roster_) {
-      if (p.id == r->id()) saved.model_file = p.model->file;
+      if (p.id != r->id()) continue;
+      saved.model_file = p.model->file;
+      saved.built_at = std::array<double, 3>{p.x, p.y, p.yaw};
     }
     for (PartState& p : r->SaveParts()) {
       saved.parts.push_back(SavedPart{p.kind, std::move(p.plugin), std::move(p.version), p.failed, std::move(p.state)});
@@ -140,6 +142,11 @@ void World::Restore(const SavedState& s) {
     }
     for (const auto& team_model : model_.team_models) {
       if (!p.model && team_model && team_model->file == saved.model_file) p.model = team_model;
+    }
+    if (saved.built_at) {
+      p.x = (*saved.built_at)[0];
+      p.y = (*saved.built_at)[1];
+      p.yaw = (*saved.built_at)[2];
     }
     if (!p.model) {
       throw SnapshotError("the snapshot's robot " + Name(saved.id) + " was built from " +

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "../common/shipped_worlds.hpp"
 #include "../common/test_world.hpp"
 #include "ubersim/state_io.hpp"
 #include "ubersim/kernel/logging.hpp"
@@ -24,23 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Worlds {
-  std::ostringstream text;
-  StreamLog log{text, LogLevel::kWarning};
-  PluginRegistry registry{{UBERSIM_PLUGIN_BUILD_DIR}};
-  // The worlds' transports are dropped below, so their parameters need no plugin to check them.
-  ModelLoader loader{ModelLoader::DefaultSchemaDir(), [this](PluginKind k, const std::string& id) {
-                       return k == PluginKind::kTransport ? std::string(R"({"type": "object"})")
-                                                          : registry.Find(k, id).schema_json;
-                     }};
-
-  WorldModel Load(const std::string& name, const std::string& broadphase = "") {
-    WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/" + name + ".yaml");
-    model.transports.clear();
-    if (!broadphase.empty()) model.physics.broadphase = broadphase;
-    return model;
-  }
-};
+using Worlds = testing::ShippedWorlds;
 
 // The same events in both runs, as a function of the step and the world's own state: every
 // robot driven at 100 Hz (varying local velocities), dribblers switched, a kick every half second,

@@ -114,12 +114,10 @@ class CollisionManager {
   void SetSweptBallStep(double dt) { swept_ball_step_ = dt; }
   /// Removes the contact joints of the last step.
   void ClearContacts();
-  /// Geometries came into the scene after the first step (a robot came on): they are filed as
-  /// they come; what the swept ball test gathered of the scene is gathered again.
-  void GeometriesAdded();
-  /// Geometries left the scene (a robot was taken out): every geometry is filed anew and every
-  /// cache that may name a destroyed one is dropped.
-  void GeometriesRemoved();
+  /// Files every geometry anew, in scene-graph order, and drops every cache that may name one:
+  /// after the scene is built, and whenever robots come or go. The broadphase's pair order then
+  /// depends only on the tree, so a world rebuilt from a snapshot pairs as the original did.
+  void Refile();
   /// Counters of the last Collide().
   const CollisionStats& stats() const { return stats_; }
   /// How many pairs' resolved surfaces are cached now (bounded, however long the run).

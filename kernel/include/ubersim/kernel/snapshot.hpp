@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -61,6 +62,7 @@ struct SavedRobot {
   bool present = true;            ///< on the field
   std::vector<SavedPart> parts;   ///< in the robot's order (drive, dribbler, kicker)
   std::string model_file;         ///< the robot file it was built from, before robot specs ("" in older snapshots)
+  std::optional<std::array<double, 3>> built_at;  ///< x, y, yaw where it was built (m, rad); older snapshots: none
 };
 
 /// A model file the world was built from, and a digest of its bytes.

@@ -150,7 +150,7 @@ class World {
   // Takes a robot out of the world: its parts, then its bodies; and out of the roster.
   void RemoveRobot(const RobotId& id);
   // After robots came or went: the collision manager, the repair records, the body list.
-  void RobotsChanged(bool removed);
+  void RobotsChanged();
   // A robot that is not in the world comes on (PositionEvent with present: true); null, with
   // the reasons in `answer`, when it cannot.
   Robot* ComeOn(const PositionEvent& e, EventAnswer& answer);
