@@ -47,6 +47,25 @@ void PerceptionPipeline::Configure(const PerceptionModel& model) {
   latency_ns_ = Ns(model_.latency);
 }
 
+void PerceptionPipeline::SetCameras(std::vector<CameraModel> cameras) {
+  const std::int64_t next = next_capture_ns_.empty()
+                                ? period_ns_
+                                : *std::min_element(next_capture_ns_.begin(), next_capture_ns_.end());
+  std::vector<std::int64_t> schedule(cameras.size(), next);
+  std::vector<std::uint32_t> numbers(cameras.size(), 0);
+  for (std::size_t i = 0; i < cameras.size(); ++i) {
+    for (std::size_t j = 0; j < model_.cameras.size(); ++j) {
+      if (model_.cameras[j].id == cameras[i].id) {
+        schedule[i] = next_capture_ns_[j];
+        numbers[i] = frame_numbers_[j];
+      }
+    }
+  }
+  model_.cameras = std::move(cameras);
+  next_capture_ns_ = std::move(schedule);
+  frame_numbers_ = std::move(numbers);
+}
+
 bool PerceptionPipeline::CaptureDue(std::int64_t now_ns) const {
   return std::any_of(next_capture_ns_.begin(), next_capture_ns_.end(),
                      [now_ns](std::int64_t t) { return t <= now_ns; });

@@ -416,6 +416,12 @@ void NodeImpl::RemoveChild(const NodeImpl& child) {
   std::erase_if(children_, [&child](const std::unique_ptr<NodeImpl>& c) { return c.get() == &child; });
 }
 
+NodeImpl& NodeImpl::AddChildFirst(std::string_view name) {
+  AddChild(name);  // its checks
+  std::rotate(children_.begin(), children_.end() - 1, children_.end());
+  return *children_.front();
+}
+
 NodeImpl* NodeImpl::FindChildNode(std::string_view name) const {
   for (const auto& c : children_) {
     if (c->name_ == name) return c.get();

@@ -206,6 +206,7 @@ VisionFrame GetFrame(const pb::VisionFrame& in) {
 void PutState(const SavedState& s, pb::WorldState& out) {
   out.set_world_name(s.world_name);
   out.set_world_file(s.world_file);
+  out.set_field_file(s.field_file);
   out.set_structure(s.structure);
   for (const ModelFileDigest& m : s.model_files) {
     pb::ModelFile* o = out.add_model_files();
@@ -310,6 +311,7 @@ SavedState GetState(const pb::WorldState& in) {
   SavedState s;
   s.world_name = in.world_name();
   s.world_file = in.world_file();
+  s.field_file = in.field_file();
   s.structure = in.structure();
   for (const pb::ModelFile& m : in.model_files()) s.model_files.push_back(ModelFileDigest{m.path(), m.digest()});
   s.ubersim_version = in.ubersim_version();

@@ -156,6 +156,7 @@ World::World(const WorldModel& model, PluginRegistry& registry, Log& log, bool s
       faults_(ParseFaultPolicy(model.on_plugin_fault), log) {
   if (!model_.field || !model_.ball) throw std::runtime_error("world has no field or ball model");
   field_geometry_ = model_.field->geometry;
+  initial_field_ = model_.field;
   roster_ = model_.robots;
   Build();
   if (start_transports_) {
@@ -305,6 +306,7 @@ void World::RemoveRobot(const RobotId& id) {
 }
 
 void World::RobotsChanged() {
+  ++roster_version_;
   collision_->Refile();
   last_good_.Track(scene_->Root());
   body_ids_for_ = 0;  // the step's body list is made again
@@ -372,6 +374,7 @@ void World::RebuildRobot(Robot& robot, EventAnswer& answer) {
 
 void World::Reset() {
   roster_ = model_.robots;
+  if (model_.field != initial_field_) UseField(initial_field_);
   Rebuild();
   log_.Info("world reset to " + model_.file);
   PublishSnapshot();  // seen at once, also while paused
@@ -413,7 +416,7 @@ Robot* World::FindRobot(const RobotId& id) const {
 void World::ProcessEvents() { ApplyEvents(false); }
 
 void World::ApplyEvents(bool stepping) {
-  (void)stepping;
+  const std::uint64_t roster_before = roster_version_;
   for (Event& e : events_.Drain()) {
     std::visit(
         [this](auto& ev) {
@@ -436,6 +439,9 @@ void World::ApplyEvents(bool stepping) {
     if (q.reply) q.reply(Query(q.target));
   }
   pending_queries_.clear();
+  // A robot that came on or was rebuilt while the world stands still is seen at once (a step
+  // publishes anyway).
+  if (!stepping && roster_version_ != roster_before) PublishSnapshot();
 }
 
 void World::Apply(const PositionEvent& e) {
@@ -611,21 +617,91 @@ void World::Apply(const RobotSpecEvent& e) {
 void World::Apply(const FieldEvent& e) {
   // Sizes match to the millimetre the wire carries.
   const auto same = [](double a, double b) { return std::abs(a - b) < 0.0005; };
-  const FieldGeometry& g = field_geometry_;
-  const bool matches = same(e.field_length, g.field_length) && same(e.field_width, g.field_width) &&
-                       same(e.goal_width, g.goal_width) && same(e.goal_depth, g.goal_depth) &&
-                       same(e.boundary_width, g.boundary_width) &&
-                       (!e.penalty_area_depth || same(*e.penalty_area_depth, g.penalty_area_depth)) &&
-                       (!e.penalty_area_width || same(*e.penalty_area_width, g.penalty_area_width));
+  const auto matches = [&](const FieldGeometry& g) {
+    return same(e.field_length, g.field_length) && same(e.field_width, g.field_width) &&
+           same(e.goal_width, g.goal_width) && same(e.goal_depth, g.goal_depth) &&
+           same(e.boundary_width, g.boundary_width) &&
+           (!e.penalty_area_depth || same(*e.penalty_area_depth, g.penalty_area_depth)) &&
+           (!e.penalty_area_width || same(*e.penalty_area_width, g.penalty_area_width));
+  };
   EventAnswer answer;
-  if (!matches) {
-    answer.errors.push_back("the world's field is '" + g.name + "' (" + std::to_string(g.field_length) + " × " +
-                            std::to_string(g.field_width) + " m); a field of another size is not built while it runs");
+  std::shared_ptr<const FieldModel> target;
+  std::string known;
+  for (const auto& f : KnownFields()) {
+    if (!target && matches(f->geometry)) target = f;
+    char size[96];
+    std::snprintf(size, sizeof size, "%s%s (%.3f × %.3f m)", known.empty() ? "" : ", ", f->geometry.name.c_str(),
+                  f->geometry.field_length, f->geometry.field_width);
+    known += size;
+  }
+  if (!target) {
+    char asked[64];
+    std::snprintf(asked, sizeof asked, "%.3f × %.3f m", e.field_length, e.field_width);
+    answer.errors.push_back(std::string("no field of this world has the size asked for (") + asked + ", goal " +
+                            std::to_string(e.goal_width) + " m); it knows " + known +
+                            " (the world file's fields: list)");
     ++event_counters_.rejected;
   } else {
+    if (target != model_.field) ChangeField(target, answer);
     ++event_counters_.applied;
   }
   if (e.reply) e.reply(answer);
+}
+
+std::vector<std::shared_ptr<const FieldModel>> World::KnownFields() const {
+  std::vector<std::shared_ptr<const FieldModel>> out = {model_.field};
+  for (const auto& f : model_.other_fields) {
+    if (f->file != model_.field->file) out.push_back(f);
+  }
+  if (initial_field_ && initial_field_ != model_.field &&
+      std::none_of(out.begin(), out.end(), [&](const auto& f) { return f->file == initial_field_->file; })) {
+    out.push_back(initial_field_);
+  }
+  return out;
+}
+
+void World::UseField(std::shared_ptr<const FieldModel> field) {
+  model_.field = std::move(field);
+  field_geometry_ = model_.field->geometry;  // in place: the transports hold a reference
+  // As many cameras, as high, over the new carpet.
+  const std::vector<CameraModel>& now = perception_.model().cameras;
+  const double height = now.empty() ? 6.0 : now.front().position.z();
+  perception_.SetCameras(CameraGrid(static_cast<int>(std::max<std::size_t>(1, now.size())),
+                                    field_geometry_.carpet_length, field_geometry_.carpet_width, height));
+}
+
+void World::ChangeField(std::shared_ptr<const FieldModel> field, EventAnswer& answer) {
+  const std::string from = model_.field->geometry.name;
+  UseField(std::move(field));
+  NodeImpl& root = scene_->Root();
+  if (NodeImpl* old = root.FindChildNode("field")) root.RemoveChild(*old);
+  BuildField(*model_.field, root.AddChildFirst("field"));
+  // Everything stays where it was, inside the new walls.
+  const double half_x = 0.5 * field_geometry_.carpet_length, half_y = 0.5 * field_geometry_.carpet_width;
+  int moved = 0;
+  for (const auto& r : robots_) {
+    const Pose p = r->chassis().GetPose();
+    const double margin = r->model().body.radius + 0.05;
+    const double x = std::clamp(p.position.x(), -half_x + margin, half_x - margin);
+    const double y = std::clamp(p.position.y(), -half_y + margin, half_y - margin);
+    if (x != p.position.x() || y != p.position.y()) {
+      r->Teleport(x, y, p.Yaw());
+      r->SetVelocity(Vec3::Zero(), Vec3::Zero());
+      ++moved;
+    }
+  }
+  Pose ball = ball_->GetPose();
+  const double m = model_.ball->radius + 0.05;
+  if (std::abs(ball.position.x()) > half_x - m || std::abs(ball.position.y()) > half_y - m) {
+    ball.position.x() = std::clamp(ball.position.x(), -half_x + m, half_x - m);
+    ball.position.y() = std::clamp(ball.position.y(), -half_y + m, half_y - m);
+    ball_->SetPose(ball);
+    ball_->SetTwist(Twist{});
+  }
+  RobotsChanged();
+  log_.Info("field changed from '" + from + "' to '" + field_geometry_.name + "'" +
+            (moved ? " (" + std::to_string(moved) + " robots moved inside the new walls)" : std::string()));
+  if (moved) answer.unapplied.push_back(std::to_string(moved) + " robots were outside the new walls and were moved inside");
 }
 
 void World::Apply(const TransportSettingEvent& e) {

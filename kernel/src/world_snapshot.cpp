@@ -91,6 +91,7 @@ SavedState World::Save() const {
   SavedState s;
   s.world_name = model_.name;
   s.world_file = model_.file;
+  s.field_file = model_.field->file;
   s.structure = StructureDigest();
   s.model_files = ModelFiles(model_);
   s.ubersim_version = UBERSIM_VERSION;
@@ -160,13 +161,25 @@ void World::Restore(const SavedState& s) {
   for (const ModelFileDigest& f : s.model_files) {
     if (std::filesystem::exists(f.path) && FileDigest(f.path) != f.digest) changed += (changed.empty() ? "" : ", ") + f.path;
   }
-  // Built as the snapshot's world was, then compared.
+  // Built as the snapshot's world was (its field, its robots), then compared.
+  const std::shared_ptr<const FieldModel> field_before = model_.field;
+  if (!s.field_file.empty() && s.field_file != model_.field->file) {
+    std::shared_ptr<const FieldModel> field;
+    for (const auto& f : KnownFields()) {
+      if (f->file == s.field_file) field = f;
+    }
+    if (!field) {
+      throw SnapshotError("the snapshot's field is " + s.field_file + ", which " + ours + " does not name (fields:)");
+    }
+    UseField(field);
+  }
   roster_ = std::move(roster);
   specs_.clear();
   spec_models_.clear();
   for (const auto& [id, spec] : s.robot_specs) specs_[{static_cast<int>(id.team), id.id}] = spec;
   Rebuild();
   if (s.structure != StructureDigest()) {
+    UseField(field_before);
     roster_ = model_.robots;  // as freshly built
     specs_.clear();
     spec_models_.clear();
@@ -191,6 +204,7 @@ void World::Restore(const SavedState& s) {
     perception_.RestoreState(s.perception);
     radio_.RestoreState(s.radio);
   } catch (const std::exception& e) {
+    UseField(field_before);
     roster_ = model_.robots;  // as freshly built, not half restored
     specs_.clear();
     spec_models_.clear();

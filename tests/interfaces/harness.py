@@ -71,6 +71,9 @@ class World:
             self.data[key] = absolute(self.data[key])
         for robot in self.data.get("robots", []):
             robot["model"] = absolute(robot["model"])
+        self.data["fields"] = [absolute(p) for p in self.data.get("fields", [])]
+        for team in self.data.get("teams", {}).values():
+            team["model"] = absolute(team["model"])
         self.data["plugin_paths"] = [absolute(p) for p in self.data.get("plugin_paths", [])]
         self.data["transports"] = []
 

@@ -194,7 +194,7 @@ class BadDatagrams(GrsimSimulation):
             command(12, veltangent=2.0).SerializeToString(),  # no such robot
             command(7, yellow=True, veltangent=2.0).SerializeToString(),
             robot_replacement(4, float("nan"), 0.0, 0.0).SerializeToString(),
-            robot_replacement(14, 0.0, 0.0, 0.0).SerializeToString(),
+            robot_replacement(16, 0.0, 0.0, 0.0).SerializeToString(),  # ids are 0..15
             robot_replacement(5, 40.0, 0.0, 0.0).SerializeToString(),  # off the carpet
             ball_replacement(x=float("inf")).SerializeToString(),
             b"\x00" * 20000,                                  # longer than max_datagram

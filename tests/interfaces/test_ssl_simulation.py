@@ -19,6 +19,7 @@ import unittest
 
 import yaml
 
+import harness
 import ssl_simulation_control_pb2 as control_pb
 import ssl_simulation_custom_erforce_pb2 as erforce_pb
 import ssl_simulation_robot_control_pb2 as robot_pb
@@ -59,14 +60,7 @@ class SimProcess:
     def __init__(self, world="div-b", sync_team=None, perception=None, radio="ideal", extra_params=None):
         self.control_port, self.blue_port, self.yellow_port, self.sync_port = free_ports(4)
         self.tmp = tempfile.TemporaryDirectory(prefix="ubersim-sslsim-")
-        src = os.path.join(SOURCE_DIR, "models", "worlds", world + ".yaml")
-        with open(src) as f:
-            doc = yaml.safe_load(f)
-        base = os.path.dirname(src)
-        doc["field"] = os.path.normpath(os.path.join(base, doc["field"]))
-        doc["ball"] = os.path.normpath(os.path.join(base, doc["ball"]))
-        for r in doc["robots"]:
-            r["model"] = os.path.normpath(os.path.join(base, r["model"]))
+        doc = harness.World(world).data  # the shipped world, its paths made absolute
         params = {"plugin": "ssl_simulation", "control_port": self.control_port,
                   "blue_port": self.blue_port, "yellow_port": self.yellow_port}
         if sync_team:
@@ -84,7 +78,8 @@ class SimProcess:
         self.proc = None
 
     def start(self):
-        self.proc = subprocess.Popen([BINARY, "run", self.world, "--quiet"], stdin=subprocess.DEVNULL,
+        # Loopback only: outside a network namespace of its own a test never opens the LAN.
+        self.proc = subprocess.Popen([BINARY, "run", self.world, "--quiet", "--local-only"], stdin=subprocess.DEVNULL,
                                      stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         self.reader = threading.Thread(target=self._read_stderr, daemon=True)
         self.reader.start()

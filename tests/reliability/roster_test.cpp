@@ -258,6 +258,62 @@ TEST(Roster, ASnapshotAfterEachKindOfChangeContinuesBitForBit) {
   }
 }
 
+FieldEvent DivASize() {
+  FieldEvent e;
+  e.field_length = 12.0;
+  e.field_width = 9.0;
+  e.goal_width = 1.8;
+  e.goal_depth = 0.18;
+  e.boundary_width = 0.3;
+  return e;
+}
+
+// A client's geometry of another league size rebuilds the field from the world's fields:, with
+// the robots and ball kept; one of no known size is answered with the sizes it knows.
+TEST(Roster, TheFieldChangesToAKnownLeagueSizeKeepingRobotsAndBall) {
+  testing::ShippedWorlds s;
+  const WorldModel model = Small(s);
+  World world(model, s.registry, s.log, false);
+  const Vec3 blue0 = Find(world.Snapshot(), Team::kBlue, 0)->pose.position;
+  EventAnswer a = Ask(world, DivASize());
+  EXPECT_TRUE(a.errors.empty()) << a.errors.front();
+  WorldSnapshot now = world.Snapshot();
+  EXPECT_EQ(now.field->name, "div-a");
+  EXPECT_DOUBLE_EQ(now.field->field_length, 12.0);
+  EXPECT_EQ(world.robot_count(), 4u);
+  EXPECT_NEAR((Find(now, Team::kBlue, 0)->pose.position - blue0).norm(), 0.0, 1e-9);
+  // A shot along the carpet now travels to the new walls: 5.5 m out, beyond Div B's 4.8 m carpet.
+  PositionEvent shot{Target::Ball(), Vec3(4.0, 2.0, 0.0), std::nullopt, Vec3(4.0, 0.0, 0.0), std::nullopt, std::nullopt};
+  world.events().Post(shot);
+  double furthest = 0;
+  for (int i = 0; i < 800; ++i) {
+    world.Step();
+    furthest = std::max(furthest, world.Snapshot().ball.pose.position.x());
+  }
+  EXPECT_GT(furthest, 5.0);
+  // The cameras see the new field: the robots are reported.
+  EXPECT_FALSE(Seen(world, 100).empty());
+
+  FieldEvent odd = DivASize();
+  odd.field_length = 7.0;
+  a = Ask(world, odd);
+  ASSERT_EQ(a.errors.size(), 1u);
+  EXPECT_NE(a.errors[0].find("div-a (12.000 × 9.000 m)"), std::string::npos) << a.errors[0];
+  EXPECT_NE(a.errors[0].find("div-b (9.000 × 6.000 m)"), std::string::npos) << a.errors[0];
+
+  // Saved and restored with its field; a reset goes back to the world file's.
+  Drive(world, {Forward(Team::kBlue, 0, 1.0)}, 200);
+  const SavedState saved = DecodeSnapshot(EncodeSnapshot(world.Save()), "memory");
+  Drive(world, {Forward(Team::kBlue, 0, 1.0)}, 300);
+  World restored(model, s.registry, s.log, false);
+  restored.Restore(saved);
+  EXPECT_EQ(restored.Snapshot().field->name, "div-a");
+  Drive(restored, {Forward(Team::kBlue, 0, 1.0)}, 300);
+  EXPECT_EQ(restored.StateHash(), world.StateHash());
+  world.Reset();
+  EXPECT_EQ(world.Snapshot().field->name, "div-b");
+}
+
 TEST(Roster, AResetBringsBackTheWorldFilesRobotsWithTheirSpecs) {
   testing::ShippedWorlds s;
   World world(Small(s), s.registry, s.log, false);

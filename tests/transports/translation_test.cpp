@@ -170,6 +170,31 @@ TEST(GrsimTranslator, BadEntriesAreLeftOutWithAReason) {
   EXPECT_NE(rejects[3].find("off the carpet"), std::string::npos) << rejects[3];
 }
 
+// As on grSim, every id 0..15 has a robot: a replacement puts one not in the world on the
+// field (turnon unset or true), turning off one that is not there is a quiet no-op.
+TEST(GrsimTranslator, ReplacementsBringRobotsOnAsGrSimDoes) {
+  grsim::Translator t(100.0);
+  std::vector<Event> events;
+  std::vector<std::string> rejects;
+  grSim_Packet p;
+  for (std::uint32_t id : {5u, 6u, 16u}) {
+    auto* r = p.mutable_replacement()->add_robots();
+    r->set_x(1);
+    r->set_y(0.2 * id);
+    r->set_dir(90);
+    r->set_id(id);
+    r->set_yellowteam(true);
+    if (id == 6) r->set_turnon(false);
+  }
+  t.Translate(p, TwoRobots(), events, rejects);
+  ASSERT_EQ(events.size(), 1u);
+  const auto& e = std::get<PositionEvent>(events[0]);
+  EXPECT_EQ(e.target.robot, (RobotId{Team::kYellow, 5}));
+  EXPECT_TRUE(*e.present);
+  ASSERT_EQ(rejects.size(), 1u);
+  EXPECT_NE(rejects[0].find("robot ids are 0..15"), std::string::npos) << rejects[0];
+}
+
 TEST(GrsimTranslator, ReplacementsInDegreesAndUnsetBallFieldsKept) {
   grsim::Translator t(100.0);
   std::vector<Event> events;

@@ -391,6 +391,21 @@ struct ModelLoader::Impl {
 
     const ParamView field_key = v["field"];
     w.field = Field(resolve(field_key), &field_key);
+    if (v.Has("fields")) {
+      const ParamView fields = v["fields"];
+      for (std::size_t i = 0; i < fields.Size(); ++i) {
+        const ParamView key = fields.At(i);
+        const fs::path file = resolve(key);
+        if (file.string() == w.field->file) continue;  // the world's own
+        auto other = Field(file, &key);
+        for (const auto& known : w.other_fields) {
+          if (known->geometry.name == other->geometry.name) {
+            throw ErrorAt(key, "a field named '" + other->geometry.name + "' is listed already");
+          }
+        }
+        w.other_fields.push_back(std::move(other));
+      }
+    }
     const ParamView ball_key = v["ball"];
     w.ball = Ball(resolve(ball_key), &ball_key);
     const FieldGeometry& g = w.field->geometry;

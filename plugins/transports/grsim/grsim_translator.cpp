@@ -127,10 +127,14 @@ void Translator::Robot(const grSim_RobotReplacement& r, const WorldView& world, 
                        std::vector<std::string>& rejects) {
   const RobotId id{r.yellowteam() ? Team::kYellow : Team::kBlue, static_cast<int>(std::min<std::uint32_t>(r.id(), 1000000))};
   const std::string where = "replacement of " + Describe(id) + ": ";
-  if (std::string why = CheckRobot(id, world); !why.empty()) {
-    rejects.push_back(where + why);
+  if (id.id > 15) {
+    rejects.push_back(where + "robot ids are 0..15");
     return;
   }
+  // As on grSim, every id 0..15 has a robot: one not in the world comes on (turnon, grSim's
+  // default, true), and turning off one that is not there does nothing.
+  const bool on = r.has_turnon() ? r.turnon() : true;
+  if (!on && !CheckRobot(id, world).empty()) return;
   if (!Finite({r.x(), r.y(), r.dir()})) {
     rejects.push_back(where + "a value is NaN or infinite");
     return;
@@ -143,7 +147,7 @@ void Translator::Robot(const grSim_RobotReplacement& r, const WorldView& world, 
   e.target = Target::Robot(id);
   e.position = Vec3(r.x(), r.y(), 0.0);
   e.yaw = transport::DegToRad(r.dir());    // grSim sends degrees
-  e.present = r.has_turnon() ? r.turnon() : true;  // grSim's default: on
+  e.present = on;
   events.emplace_back(std::move(e));
 }
 

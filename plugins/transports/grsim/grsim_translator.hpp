@@ -26,8 +26,9 @@ struct WorldView {
 };
 
 /// Turns grSim packets into position and command events. Each robot command and each replacement
-/// is checked on its own (known robot of that team, finite values, on the carpet): a bad one is
-/// left out with a reason, the others still apply. Remembers each robot's spinner, so a dribbler
+/// is checked on its own (commands: a known robot of that team; replacements: ids 0..15, a robot
+/// not in the world comes on; finite values, on the carpet): a bad one is left out with a reason,
+/// the others still apply. Remembers each robot's spinner, so a dribbler
 /// is only told when it changes, and each robot's last kick elevation.
 class Translator {
  public:

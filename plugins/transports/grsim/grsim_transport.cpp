@@ -64,6 +64,10 @@ class GrsimTransport final : public ubersim::Transport {
       for (const ubersim::RobotState& r : s.robots) world_.robots.push_back(r.id);
       world_.known = true;
     }
+    if (s.field) {  // the field may change while the world runs (the simulation protocol's geometry)
+      world_.half_length = 0.5 * s.field->carpet_length;
+      world_.half_width = 0.5 * s.field->carpet_width;
+    }
     world_.ball_position = s.ball.pose.position;
     world_.ball_velocity = s.ball.twist.linear;
     world_.ball_radius = s.ball.radius;

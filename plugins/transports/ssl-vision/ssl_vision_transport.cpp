@@ -89,6 +89,7 @@ class SslVisionTransport final : public ubersim::Transport {
     } catch (const std::invalid_argument& e) {
       throw p["timestamps"].Error(e.what());
     }
+    context_ = &ctx;
     geometry_.field = ctx.Field();
     geometry_.cameras = ctx.Cameras();
     geometry_.intrinsics = ReadIntrinsics(p);
@@ -106,24 +107,31 @@ class SslVisionTransport final : public ubersim::Transport {
 
   void Publish(const ubersim::WorldSnapshot& s) override {
     clock_->Update(s.sim_time_ns);
-    // Robot heights and radii are known from the first snapshot on (and again after a reset).
-    if (!seen_world_ || s.sim_time_ns < last_sim_ns_) {
-      seen_world_ = true;
-      heights_.clear();
-      double max_radius = 0.0;
-      for (const ubersim::RobotState& r : s.robots) {
-        heights_[{r.id.team == ubersim::Team::kBlue ? 0 : 1, r.id.id}] = r.height;
-        max_radius = std::max(max_radius, r.radius);
-      }
-      if (max_radius <= 0.0) max_radius = geometry_.max_robot_radius;  // no robots: keep the default
-      if (max_radius != geometry_.max_robot_radius || s.ball.radius != geometry_.ball_radius) {
-        geometry_.max_robot_radius = max_radius;
-        geometry_.ball_radius = s.ball.radius;
-        RebuildGeometry();
-        SendGeometry();
-      }
+    // Robots come and go and are rebuilt with other specs, and the field may change: the
+    // heights detections carry and the geometry follow (the geometry is sent again at once).
+    bool changed = false;
+    double max_radius = 0.0;
+    for (const ubersim::RobotState& r : s.robots) {
+      double& height = heights_[{r.id.team == ubersim::Team::kBlue ? 0 : 1, r.id.id}];
+      height = r.height;
+      max_radius = std::max(max_radius, r.radius);
     }
-    last_sim_ns_ = s.sim_time_ns;
+    if (max_radius <= 0.0) max_radius = geometry_.max_robot_radius;  // no robots: keep it
+    if (max_radius != geometry_.max_robot_radius || s.ball.radius != geometry_.ball_radius) {
+      geometry_.max_robot_radius = max_radius;
+      geometry_.ball_radius = s.ball.radius;
+      changed = true;
+    }
+    if (s.field && (s.field->name != geometry_.field.name || s.field->field_length != geometry_.field.field_length ||
+                    s.field->field_width != geometry_.field.field_width)) {
+      geometry_.field = *s.field;
+      geometry_.cameras = context_->Cameras();
+      changed = true;
+    }
+    if (changed) {
+      RebuildGeometry();
+      SendGeometry();
+    }
   }
 
   void OnVisionFrame(const ubersim::VisionFrame& frame) override {
@@ -223,11 +231,10 @@ class SslVisionTransport final : public ubersim::Transport {
   }
 
   // Simulation thread only.
+  ubersim::TransportContext* context_ = nullptr;
   std::unique_ptr<WireClock> clock_;
   GeometryInputs geometry_;
   ubersim::ssl_vision::RobotHeights heights_;
-  bool seen_world_ = false;
-  std::int64_t last_sim_ns_ = 0;
   std::string buffer_;
   MulticastSender::Options options_;
   // Shared with the geometry thread.

@@ -57,11 +57,17 @@ class ViewerTransport final : public ubersim::Transport {
                                                         : field.field_length + 2 * field.boundary_width);
     limits_.half_width = 0.5 * (field.carpet_width > 0 ? field.carpet_width
                                                       : field.field_width + 2 * field.boundary_width);
+    context_ = &ctx;
+    rate_ = rate;
+    field_name_ = field.name;
     hello_ = ubersim::viewer::EncodeHello(ctx.WorldName(), rate, field, ctx.Cameras());
     refusals_ = std::make_unique<ubersim::transport::RejectLog>(ctx.Logger(), "viewer command refused");
 
     ViewerServer::Callbacks callbacks;
-    callbacks.hello = [this] { return hello_; };
+    callbacks.hello = [this] {
+      std::lock_guard lock(mutex_);
+      return hello_;
+    };
     callbacks.on_message = [this](std::string_view text) { return OnMessage(text); };
     callbacks.latest_state = [this] { return EncodeLatest(); };
     callbacks.tick = [this] { Tick(); };
@@ -78,12 +84,28 @@ class ViewerTransport final : public ubersim::Transport {
     const bool reset = snapshot.sim_time_ns < published_time_ns_.load(std::memory_order_relaxed);
     published_step_ = snapshot.step;
     published_time_ns_.store(snapshot.sim_time_ns, std::memory_order_relaxed);
+    if (snapshot.field && snapshot.field->name != field_name_) FieldChanged(*snapshot.field);
     const auto now = SteadyClock::now();
     if (now < next_sample_ && !reset) return;
     next_sample_ = now + period_;
     std::lock_guard lock(mutex_);
     ubersim::viewer::SampleSnapshot(snapshot, sample_);
     have_sample_ = true;
+  }
+
+  // A client changed the field (the simulation protocol's geometry): pages draw the new one, and
+  // drags are limited to its carpet.
+  void FieldChanged(const ubersim::FieldGeometry& field) {
+    field_name_ = field.name;
+    auto hello = std::make_shared<const std::string>(
+        ubersim::viewer::EncodeHello(context_->WorldName(), rate_, field, context_->Cameras()));
+    {
+      std::lock_guard lock(mutex_);
+      hello_ = *hello;
+      limits_.half_length = 0.5 * field.carpet_length;
+      limits_.half_width = 0.5 * field.carpet_width;
+    }
+    if (server_) server_->Broadcast(hello);
   }
 
   void OnVisionFrame(const ubersim::VisionFrame& frame) override {
@@ -116,7 +138,12 @@ class ViewerTransport final : public ubersim::Transport {
 
   // Server thread: a page's command → events, and the reply.
   std::string OnMessage(std::string_view text) {
-    ubersim::viewer::DecodedCommand c = ubersim::viewer::DecodeCommand(text, limits_);
+    CommandLimits limits;
+    {
+      std::lock_guard lock(mutex_);  // FieldChanged may change them
+      limits = limits_;
+    }
+    ubersim::viewer::DecodedCommand c = ubersim::viewer::DecodeCommand(text, limits);
     if (!c.error.empty()) {
       refusals_->Reject((c.cmd.empty() ? std::string() : "'" + c.cmd + "': ") + c.error);
       return ubersim::viewer::EncodeReply(c.cmd, c.id, c.error);
@@ -220,12 +247,15 @@ class ViewerTransport final : public ubersim::Transport {
   }
 
   // Set in Start, then read-only.
+  ubersim::TransportContext* context_ = nullptr;
+  double rate_ = 60.0;
   SteadyClock::duration period_{};
   ubersim::EventSink* events_ = nullptr;
-  CommandLimits limits_;
+  CommandLimits limits_;  // under mutex_ (the field may change)
   std::string hello_;
   std::unique_ptr<ubersim::transport::RejectLog> refusals_;
   // Simulation thread only (written by Publish, read by query replies).
+  std::string field_name_;
   SteadyClock::time_point next_sample_{};
   std::int64_t published_step_ = 0;
   // Written by the simulation thread every step, read by the server thread.

@@ -153,6 +153,9 @@ struct WorldModel {
   /// What a plugin fault does: "stop" (the default: the world stops after the step, state
   /// saved) or "disable" (the plugin is switched off and the world carries on); fault.hpp.
   std::string on_plugin_fault = "stop";
+  /// Other fields the world may be switched to while it runs (`fields:`; a client's geometry of
+  /// that size, `ubersim run --field`), besides `field`.
+  std::vector<std::shared_ptr<const FieldModel>> other_fields;
   /// The robot model of each team's robots that come on while the world runs (`teams:`; else
   /// the model of the team's first robot, else of the other team's): [blue, yellow], may be null.
   std::array<std::shared_ptr<const RobotModel>, 2> team_models;

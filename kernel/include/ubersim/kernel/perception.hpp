@@ -83,6 +83,9 @@ class PerceptionPipeline {
   void Reset();
   /// Changes noise, drop-outs, overlap and latency while running; frame rate and cameras stay.
   void Configure(const PerceptionModel& model);
+  /// Other cameras (another field): a camera id kept keeps its frame numbers and schedule, a new
+  /// one starts with the others' next capture; frames in flight still leave.
+  void SetCameras(std::vector<CameraModel> cameras);
   /// The configuration.
   const PerceptionModel& model() const { return model_; }
   /// Everything it carries between steps.

@@ -190,6 +190,8 @@ class NodeImpl final : public SceneNode {
   /// Destroys `child` and its subtree (a robot leaving the world); nothing when it is not a
   /// child of this node. The collision manager must be told (CollisionManager::GeometriesRemoved).
   void RemoveChild(const NodeImpl& child);
+  /// A new child before every other (the field, rebuilt while the world runs, keeps its place).
+  NodeImpl& AddChildFirst(std::string_view name);
   /// Typed parent.
   NodeImpl* parent() const { return parent_; }
   /// Marks this node as one robot's root: geometries added to its subtree afterwards belong to it.

@@ -80,6 +80,7 @@ struct SavedState {
   std::vector<ModelFileDigest> model_files;  ///< the files' contents when saved
   std::string ubersim_version;    ///< the program that saved it
   std::string created_utc;        ///< when, ISO 8601
+  std::string field_file;         ///< the field it had then ("" in older snapshots: the world file's)
 
   // Clock and ODE.
   std::int64_t step = 0;          ///< steps taken

@@ -160,6 +160,12 @@ class World {
   std::shared_ptr<const RobotModel> EffectiveModel(const RobotPlacement& placement);
   // The base model of robot `id`: its roster entry's, else its team's (may be null).
   std::shared_ptr<const RobotModel> BaseModel(const RobotId& id) const;
+  // The fields a client may switch to: the world's own, its `fields:`, the world file's.
+  std::vector<std::shared_ptr<const FieldModel>> KnownFields() const;
+  // Makes `field` the world's (geometry, cameras) without building it.
+  void UseField(std::shared_ptr<const FieldModel> field);
+  // Builds `field` in place of the current one, keeping robots and ball (moved inside the walls).
+  void ChangeField(std::shared_ptr<const FieldModel> field, EventAnswer& answer);
   // Applies robot specs to models (the kernel's schemas and the registry's plugin schemas).
   const ModelLoader& Loader();
 
@@ -189,6 +195,8 @@ class World {
   std::map<std::pair<int, int>, std::pair<std::shared_ptr<const RobotModel>, std::shared_ptr<const RobotModel>>>
       spec_models_;
   std::unique_ptr<ModelLoader> loader_;
+  std::uint64_t roster_version_ = 0;
+  std::shared_ptr<const FieldModel> initial_field_;  // the world file's (a reset goes back to it)  // counts robots coming, going and rebuilt
   NodeImpl* team_nodes_[2] = {nullptr, nullptr};  // blue, yellow
   std::vector<std::unique_ptr<TransportHost>> transports_;
   FieldGeometry field_geometry_;
