@@ -33,6 +33,7 @@
 #include "ubersim/validation/scenarios.hpp"
 #include "batch.hpp"
 #include "bench.hpp"
+#include "run_overrides.hpp"
 #include "soak.hpp"
 
 namespace po = boost::program_options;
@@ -203,6 +204,7 @@ int RunCommand(const std::vector<std::string>& args) {
   std::vector<std::string> skipped_transports;
   std::string restore_file, snapshot_out, crash_dir = ".";
   double crash_snapshot_interval = 1.0;
+  RunOverrides overrides;
   desc.add_options()("help,h", "this help")
       ("fast", "run as fast as possible instead of real time")
       ("speed", po::value<double>(&speed)->default_value(1.0), "speed factor (sim s per wall s)")
@@ -210,6 +212,18 @@ int RunCommand(const std::vector<std::string>& args) {
       ("paused", "start paused")
       ("quiet,q", "no status line")
       ("local-only", "keep every transport on loopback (127.0.0.1): nothing sent to or reachable from another machine")
+      ("realism", po::value<std::string>(&overrides.realism),
+       "vision and radio preset: ÜberSim's ideal, 2003, realistic, or the league's None, Friendly, RC2021, Realistic "
+       "(what it asks for that is not modelled is listed at start)")
+      ("field,g", po::value<std::string>(&overrides.field),
+       "field: div-a or div-b (also ER-Force's 2020, 2023, 2023B); the formation scales with it")
+      ("vision-port", po::value<int>(), "SSL-Vision multicast port (default 10020; 10006 as real ssl-vision)")
+      ("vision-address", po::value<std::string>(&overrides.vision_address), "SSL-Vision multicast group (default 224.5.23.2)")
+      ("control-port", po::value<int>(), "simulation protocol: SimulatorCommand port (default 10300)")
+      ("blue-port", po::value<int>(), "simulation protocol: blue team's RobotControl port (default 10301)")
+      ("yellow-port", po::value<int>(), "simulation protocol: yellow team's RobotControl port (default 10302)")
+      ("grsim-port", po::value<int>(), "grSim protocol command port (default 20011)")
+      ("viewer-port", po::value<int>(), "browser viewer port (default 8080)")
       ("no-viewer", "do not start the browser viewer (the same as --no-transport viewer)")
       ("no-transport", po::value<std::vector<std::string>>(&skipped_transports), "do not start the world's transport ID (repeatable)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)")
@@ -250,7 +264,18 @@ int RunCommand(const std::vector<std::string>& args) {
     PluginRegistry registry(PluginSearchPath({world_file}, plugin_paths));
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(), LookupIn(registry));
     WorldModel model = loader.LoadWorld(world_file);
-    if (vm.count("local-only")) model.local_only = true;
+    overrides.local_only = vm.count("local-only") > 0;
+    for (const char* port : {"vision", "control", "blue", "yellow", "grsim", "viewer"}) {
+      if (vm.count(std::string(port) + "-port")) overrides.ports[port] = vm[std::string(port) + "-port"].as<int>();
+    }
+    try {
+      for (const std::string& note : ApplyRunOverrides(overrides, model, loader, registry)) {
+        std::cerr << "ubersim: " << note << "\n";
+      }
+    } catch (const OverrideError& e) {
+      std::cerr << "ubersim run: " << e.what() << "\n";
+      return kExitUsage;
+    }
     if (vm.count("no-viewer")) skipped_transports.push_back("viewer");
     for (const std::string& id : skipped_transports) {
       const auto removed = std::erase_if(model.transports, [&](const TransportModel& t) { return t.plugin == id; });

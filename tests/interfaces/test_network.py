@@ -17,7 +17,9 @@ import unittest
 
 import harness
 import netns
+import ssl_gc_common_pb2 as common_pb
 import ssl_simulation_control_pb2 as control_pb
+import ssl_simulation_custom_erforce_pb2 as erforce_pb
 import ssl_vision_wrapper_pb2 as wrapper_pb
 
 SHIPPED_WORLD = os.path.join(harness.MODELS_DIR, "worlds", "div-b.yaml")
@@ -140,6 +142,53 @@ class EveryLocalReceiver(unittest.TestCase):
             return any(abs(b.x - 1250) < 30 and abs(b.y + 750) < 30 for b in packet.detection.balls)
 
         harness.wait_for(ball_moved, 10, what="the teleported ball in vision")
+
+    def test_the_simulation_controllers_commands_take_effect_in_vision(self):
+        # What ssl-simulation-controller sends, to the vision's source address: robots on and off
+        # the field, and each team's robot_specs with ER-Force's spec under a bare type URL.
+        self.sim.assert_running()
+        receiver = self.receivers({"controller": netns.LAN_ADDRESS})["controller"]
+        source = harness.wait_for(lambda: receiver.recv_from(0.5), 20, what="vision")[1][0]
+
+        def send(cmd):
+            with harness.UdpClient(host=netns.LAN_ADDRESS) as client:
+                client.send(cmd, CONTROL_PORT, host=source)
+                reply = client.recv(5.0)
+                self.assertIsNotNone(reply)
+                response = control_pb.SimulatorResponse()
+                response.ParseFromString(reply[0])
+                return [e.code for e in response.errors]
+
+        def seen(team_field, rid, where=None):
+            def check():
+                data = receiver.recv(0.5)
+                if data is None:
+                    return False
+                packet = wrapper_pb.SSL_WrapperPacket()
+                packet.ParseFromString(data)
+                if not packet.HasField("detection"):
+                    return False
+                robots = [r for r in getattr(packet.detection, team_field) if r.robot_id == rid]
+                if where is None:
+                    return not robots
+                return any(abs(r.x - where[0]) < 50 and abs(r.y - where[1]) < 50 for r in robots)
+            return check
+
+        cmd = control_pb.SimulatorCommand()
+        t = cmd.control.teleport_robot.add(x=1.5, y=-1.5, present=True)
+        t.id.id, t.id.team = 8, common_pb.YELLOW
+        spec = cmd.config.robot_specs.add(radius=0.09, mass=2.4)
+        spec.id.id, spec.id.team = 8, common_pb.YELLOW
+        spec.limits.vel_absolute_max = 2.0
+        spec.custom.add(type_url="RobotSpecErForce",
+                        value=erforce_pb.RobotSpecErForce(shoot_radius=0.085, dribbler_width=0.068).SerializeToString())
+        self.assertEqual(send(cmd), [])
+        harness.wait_for(seen("robots_yellow", 8, (1500, -1500)), 10, what="yellow 8 on the field")
+        cmd = control_pb.SimulatorCommand()
+        t = cmd.control.teleport_robot.add(present=False)
+        t.id.id, t.id.team = 8, common_pb.YELLOW
+        self.assertEqual(send(cmd), [])
+        harness.wait_for(seen("robots_yellow", 8), 10, what="yellow 8 off the field")
 
     def test_run_prints_the_interfaces_it_sends_on(self):
         harness.wait_for(lambda: "publishing ssl_vision" in self.sim.output(), 20, what="the start lines")

@@ -2,6 +2,10 @@
 // The vision and radio presets and the default camera layout (read by the model loader).
 #include "ubersim/kernel/perception.hpp"
 
+#include <cctype>
+#include <sstream>
+#include <string>
+
 namespace ubersim::kernel {
 
 bool PerceptionPreset(const std::string& name, PerceptionModel& m) {
@@ -59,6 +63,88 @@ bool RadioPreset(const std::string& name, RadioModel& m) {
   }
   return false;
 }
+
+namespace {
+
+// The league's presets (the ER-Force simulator's config/simulator-realism/*.txt, Public Domain;
+// reference/ssl-protocols.md §6.1), in SI.
+struct LeaguePreset {
+  const char* name;
+  double ball_p, robot_p, robot_phi, ball_area;
+  bool invisible_ball;
+  double visibility_threshold, overlap, dribbler_detections, camera_position_error;
+  double command_loss, response_loss, missing_ball;
+  double vision_delay, processing_time;
+  bool simulate_dribbling;
+  double object_offset, missing_robot, command_delay;
+};
+
+constexpr LeaguePreset kLeaguePresets[] = {
+    {"None", 0, 0, 0, 0, true, 0.4, 0.3, 0, 0, 0, 0, 0, 0.035, 0.005, true, 0, 0, 0},
+    {"Friendly", 0.0004, 0.0003, 0.003, 1, true, 0.4, 1, 0.001, 0.05, 0.01, 0.01, 0.05, 0.035, 0.010, true, 0.02,
+     0.02, 0},
+    {"RC2021", 0.0010, 0.0013, 0.01, 6.5, true, 0.4, 1, 0.02, 0.0, 0.03, 0.1, 0.05, 0.035, 0.010, false, 0, 0, 0},
+    {"Realistic", 0.0014, 0.0013, 0.01, 6.5, true, 0.4, 1, 0.05, 0.1, 0.03, 0.1, 0.05, 0.035, 0.010, true, 0.02,
+     0.02, 0.003},
+};
+
+bool SameName(const std::string& a, const char* b) {
+  if (a.size() != std::char_traits<char>::length(b)) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) return false;
+  }
+  return true;
+}
+
+std::string Number(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+}  // namespace
+
+bool LeagueRealismPreset(const std::string& name, PerceptionModel& vision, RadioModel& radio,
+                         std::vector<std::string>& unmodelled) {
+  for (const LeaguePreset& p : kLeaguePresets) {
+    if (!SameName(name, p.name)) continue;
+    vision.preset = p.name;
+    vision.ball_position_sigma = p.ball_p;
+    vision.robot_position_sigma = p.robot_p;
+    vision.robot_orientation_sigma = p.robot_phi;
+    vision.camera_overlap = p.overlap;
+    vision.ball_drop = p.missing_ball;
+    vision.robot_drop = p.missing_robot;
+    vision.latency = p.vision_delay;
+    radio.preset = p.name;
+    radio.loss = p.command_loss;
+    radio.latency = p.command_delay;
+    // Named only where the preset asks for something: a zero is what ÜberSim does anyway.
+    if (p.ball_area != 0) unmodelled.push_back("stddev_ball_area " + Number(p.ball_area) + " px (no blob area is reported)");
+    if (p.invisible_ball) {
+      unmodelled.push_back("enable_invisible_ball (a ball hidden by robots stays visible; ball_visibility_threshold " +
+                           Number(p.visibility_threshold) + " unused)");
+    }
+    if (p.dribbler_detections != 0) {
+      unmodelled.push_back("dribbler_ball_detections " + Number(p.dribbler_detections) + " /s (no false ball detections)");
+    }
+    if (p.camera_position_error != 0) {
+      unmodelled.push_back("camera_position_error " + Number(p.camera_position_error) + " m (camera positions are exact)");
+    }
+    if (p.response_loss != 0) unmodelled.push_back("robot_response_loss " + Number(p.response_loss) + " (no feedback is lost)");
+    unmodelled.push_back("vision_processing_time " + Number(p.processing_time * 1e3) +
+                         " ms (t_capture is the capture time: t_sent - t_capture is the whole " +
+                         Number(p.vision_delay * 1e3) + " ms vision delay)");
+    if (!p.simulate_dribbling) unmodelled.push_back("simulate_dribbling false (dribbling stays physical, never glued)");
+    if (p.object_offset != 0) {
+      unmodelled.push_back("object_position_offset " + Number(p.object_offset) + " m (no systematic offset)");
+    }
+    return true;
+  }
+  return false;
+}
+
+const char* LeagueRealismPresetNames() { return "None, Friendly, RC2021, Realistic"; }
 
 std::vector<CameraModel> CameraGrid(int count, double length, double width, double height) {
   const int rows = count >= 4 && count % 2 == 0 ? 2 : 1;

@@ -62,6 +62,15 @@ struct RadioState {
 bool PerceptionPreset(const std::string& name, PerceptionModel& model);
 /// Defaults of a radio preset; false for an unknown name.
 bool RadioPreset(const std::string& name, RadioModel& model);
+/// The league's realism presets as the ER-Force simulator names them (None, Friendly, RC2021,
+/// Realistic; any case), put over `vision` and `radio`: noise, drop-outs, overlap, latency,
+/// command delay and loss. Frame rate and cameras stay. What the preset asks for that ÜberSim does
+/// not model goes to `unmodelled`, one entry each. False for an unknown name.
+bool LeagueRealismPreset(const std::string& name, PerceptionModel& vision, RadioModel& radio,
+                         std::vector<std::string>& unmodelled);
+/// The league's preset names, for messages: "None, Friendly, RC2021, Realistic".
+const char* LeagueRealismPresetNames();
+
 /// `count` cameras over a carpet of length × width (m): a grid, two rows once there are four or
 /// more, each camera above the centre of its cell at `height`.
 std::vector<CameraModel> CameraGrid(int count, double length, double width, double height);
