@@ -255,7 +255,7 @@ int RunCommand(const std::vector<std::string>& args) {
 
   fs::path world_file;
   try {
-    world_file = world_arg.empty() ? DefaultWorldFile() : fs::path(world_arg);
+    world_file = world_arg.empty() ? DefaultWorldFile() : WorldFileOf(world_arg);
   } catch (const std::exception& e) {
     std::cerr << "ubersim run: " << e.what() << "\n";
     return kExitRuntime;

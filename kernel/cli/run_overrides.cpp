@@ -135,9 +135,11 @@ std::vector<std::string> ApplyRunOverrides(const RunOverrides& o, WorldModel& wo
       notes.push_back(line);
     }
   }
-  for (const auto& [flag, port] : o.ports) {
+  for (const auto& entry : o.ports) {
+    const std::string& flag = entry.first;
+    const int port = entry.second;
     const auto it = std::find_if(std::begin(kPortFlags), std::end(kPortFlags),
-                                 [&](const PortFlag& p) { return flag == p.flag; });
+                                 [&flag](const PortFlag& p) { return flag == p.flag; });
     if (it == std::end(kPortFlags)) throw OverrideError("unknown port flag --" + flag + "-port");
     SetTransportParam(world, registry, std::string(flag) + "-port", it->plugin, it->key, Integer(port));
   }

@@ -642,7 +642,7 @@ void World::Apply(const FieldEvent& e) {
                             " (the world file's fields: list)");
     ++event_counters_.rejected;
   } else {
-    if (target != model_.field) ChangeField(target, answer);
+    if (target != model_.field) ChangeField(target);
     ++event_counters_.applied;
   }
   if (e.reply) e.reply(answer);
@@ -670,7 +670,7 @@ void World::UseField(std::shared_ptr<const FieldModel> field) {
                                     field_geometry_.carpet_length, field_geometry_.carpet_width, height));
 }
 
-void World::ChangeField(std::shared_ptr<const FieldModel> field, EventAnswer& answer) {
+void World::ChangeField(std::shared_ptr<const FieldModel> field) {
   const std::string from = model_.field->geometry.name;
   UseField(std::move(field));
   NodeImpl& root = scene_->Root();
@@ -701,7 +701,6 @@ void World::ChangeField(std::shared_ptr<const FieldModel> field, EventAnswer& an
   RobotsChanged();
   log_.Info("field changed from '" + from + "' to '" + field_geometry_.name + "'" +
             (moved ? " (" + std::to_string(moved) + " robots moved inside the new walls)" : std::string()));
-  if (moved) answer.unapplied.push_back(std::to_string(moved) + " robots were outside the new walls and were moved inside");
 }
 
 void World::Apply(const TransportSettingEvent& e) {

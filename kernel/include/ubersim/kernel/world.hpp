@@ -165,7 +165,7 @@ class World {
   // Makes `field` the world's (geometry, cameras) without building it.
   void UseField(std::shared_ptr<const FieldModel> field);
   // Builds `field` in place of the current one, keeping robots and ball (moved inside the walls).
-  void ChangeField(std::shared_ptr<const FieldModel> field, EventAnswer& answer);
+  void ChangeField(std::shared_ptr<const FieldModel> field);
   // Applies robot specs to models (the kernel's schemas and the registry's plugin schemas).
   const ModelLoader& Loader();
 
