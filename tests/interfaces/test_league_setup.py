@@ -6,17 +6,19 @@ robot_specs with ER-Force's custom spec under a bare type URL, a client clearing
 
 Loopback only (--local-only): a test outside a network namespace of its own never opens the LAN.
 """
-import math
+import json
 import os
 import statistics
 import time
 import unittest
+import urllib.request
 
 import harness
 import ssl_gc_common_pb2 as common_pb
 import ssl_simulation_control_pb2 as control_pb
 import ssl_simulation_custom_erforce_pb2 as erforce_pb
 import ssl_simulation_robot_control_pb2 as robot_pb
+import ssl_simulation_robot_feedback_pb2 as feedback_pb
 import ssl_vision_wrapper_pb2 as wrapper_pb
 
 SHIPPED_WORLD = os.path.join(harness.MODELS_DIR, "worlds", "div-b.yaml")
@@ -98,6 +100,25 @@ class TwoSimulators(unittest.TestCase):
         self.assertTrue(all(abs(ball.x) < 30 and abs(ball.y) < 30 for d in b.detections(20) for ball in d.balls))
 
 
+class VisionPort(unittest.TestCase):
+    def test_a_clients_vision_port_moves_the_packets_there(self):
+        s = Shipped()
+        self.addCleanup(s.close)
+        (other,) = harness.free_udp_ports(1)
+        with harness.MulticastReceiver(other) as moved:
+            cmd = control_pb.SimulatorCommand()
+            cmd.config.vision_port = other
+            self.assertEqual(s.command(cmd)[0], [])
+            moved.recv_until(lambda p: p.HasField("geometry"), 10.0, parse)  # the geometry at once
+            moved.recv_until(lambda p: p.HasField("detection"), 10.0, parse)
+            time.sleep(0.1)
+            s.receiver.drain()
+            self.assertIsNone(s.receiver.recv(0.5), "still sending to the old port")
+        cmd = control_pb.SimulatorCommand()
+        cmd.config.vision_port = 0
+        self.assertEqual(s.command(cmd)[0], ["UBERSIM_INVALID_VALUE"])
+
+
 class Realism(unittest.TestCase):
     def test_rc2021_gives_the_presets_noise_and_latency_through_the_wire(self):
         s = Shipped("--realism", "RC2021")
@@ -150,17 +171,38 @@ class RobotsAsInAMatch(unittest.TestCase):
         for (team, rid), (x, _) in seen.items():
             self.assertAlmostEqual(abs(x), 4000, delta=60, msg=(team, rid))
 
+    def feedback(self, rid):
+        """A RobotControl for yellow `rid` (a dribbler command): (error codes, ids with feedback)."""
+        rc = robot_pb.RobotControl()
+        rc.robot_commands.add(id=rid, dribbler_speed=0.0)
+        with harness.UdpClient() as team:
+            team.send(rc, self.s.yellow)
+            reply = team.recv(10.0)
+        self.assertIsNotNone(reply)
+        response = feedback_pb.RobotControlResponse()
+        response.ParseFromString(reply[0])
+        return [e.code for e in response.errors], [f.id for f in response.feedback]
+
+    def viewer_robots(self):
+        with urllib.request.urlopen(f"http://127.0.0.1:{self.s.viewer}/api/state", timeout=10) as r:
+            state = json.loads(r.read())
+        return {(r["team"], r["id"]) for r in state["robots"] if r.get("present", True)}
+
     def test_robots_come_on_go_off_and_come_back(self):
         cmd = control_pb.SimulatorCommand()
         teleport(cmd, common_pb.YELLOW, 9, 1.0, 1.0, present=True)
         self.assertEqual(self.s.command(cmd)[0], [])
         self.settle()
         self.assertIn(("yellow", 9), self.visible())
+        self.assertEqual(self.feedback(9), ([], [9]))
+        harness.wait_for(lambda: ("yellow", 9) in self.viewer_robots(), 10, what="yellow 9 in the viewer")
         cmd = control_pb.SimulatorCommand()
         teleport(cmd, common_pb.YELLOW, 9, present=False)
         self.assertEqual(self.s.command(cmd)[0], [])
         self.settle()
         self.assertNotIn(("yellow", 9), self.visible())
+        self.assertEqual(self.feedback(9), (["UBERSIM_UNKNOWN_ROBOT"], []))
+        harness.wait_for(lambda: ("yellow", 9) not in self.viewer_robots(), 10, what="yellow 9 gone from the viewer")
         cmd = control_pb.SimulatorCommand()
         teleport(cmd, common_pb.YELLOW, 9, -1.0, 1.0, present=True)
         self.assertEqual(self.s.command(cmd)[0], [])
