@@ -74,24 +74,32 @@ void MapTeleportBall(const TeleportBall& b, const MappingOptions& options, Error
   if (e.position || e.velocity) events.emplace_back(std::move(e));
 }
 
+// The robot an item names (`item`: "teleport_robot", "robot_specs"), or nullopt with one error:
+// id unset, a team that is neither BLUE nor YELLOW, an id above 15.
+std::optional<RobotId> ItemRobot(bool has_id, const ::RobotId& wire, const char* item, Errors& errors) {
+  if (!has_id || !wire.has_id()) {
+    errors.Add(codes::kMissingField, std::string("a ") + item + " has no id.id; it was skipped");
+    return std::nullopt;
+  }
+  const std::optional<Team> team = ToTeam(wire);
+  if (!team) {
+    errors.Add(codes::kInvalidTeam, std::string(item) + " " + std::to_string(wire.id()) +
+                                        ": id.team must be BLUE or YELLOW; it was skipped");
+    return std::nullopt;
+  }
+  if (wire.id() > kMaxRobotId) {
+    errors.Add(codes::kInvalidRobotId, std::string(item) + " " + ToString(*team) + " " + std::to_string(wire.id()) +
+                                           ": robot ids are 0..15; it was skipped");
+    return std::nullopt;
+  }
+  return RobotId{*team, static_cast<int>(wire.id())};
+}
+
 void MapTeleportRobot(const TeleportRobot& t, const RobotLookup& robots, Errors& errors,
                       std::vector<Event>& events) {
-  if (!t.has_id() || !t.id().has_id()) {
-    errors.Add(codes::kMissingField, "a teleport_robot has no id.id; it was skipped");
-    return;
-  }
-  const std::optional<Team> team = ToTeam(t.id());
-  if (!team) {
-    errors.Add(codes::kInvalidTeam, "teleport_robot " + std::to_string(t.id().id()) +
-                                        ": id.team must be BLUE or YELLOW; it was skipped");
-    return;
-  }
-  if (t.id().id() > kMaxRobotId) {
-    errors.Add(codes::kInvalidRobotId, "teleport_robot " + std::string(ToString(*team)) + " " +
-                                           std::to_string(t.id().id()) + ": robot ids are 0..15; it was skipped");
-    return;
-  }
-  const RobotId id{*team, static_cast<int>(t.id().id())};
+  const std::optional<RobotId> robot = ItemRobot(t.has_id(), t.id(), "teleport_robot", errors);
+  if (!robot) return;
+  const RobotId id = *robot;
   const Presence where = robots(id);
   const bool on = t.has_present() && t.present();
   // A robot that is not on the field and is not asked to come on: nothing to move, as on grSim
@@ -191,21 +199,9 @@ void MapErForceRealism(const RealismConfigErForce& r, Errors& errors, std::vecto
 
 // One RobotSpecs → RobotSpecEvent (SI already; wheel angles into the drive's order and sense).
 void MapRobotSpecs(const RobotSpecs& r, const MappingOptions& options, Errors& errors, std::vector<Event>& events) {
-  if (!r.has_id() || !r.id().has_id()) {
-    errors.Add(codes::kMissingField, "a robot_specs entry has no id.id; it was skipped");
-    return;
-  }
-  const std::optional<Team> team = ToTeam(r.id());
-  if (!team) {
-    errors.Add(codes::kInvalidTeam, "robot_specs " + std::to_string(r.id().id()) + ": id.team must be BLUE or YELLOW");
-    return;
-  }
-  if (r.id().id() > kMaxRobotId) {
-    errors.Add(codes::kInvalidRobotId, "robot_specs " + std::string(ToString(*team)) + " " +
-                                           std::to_string(r.id().id()) + ": robot ids are 0..15");
-    return;
-  }
-  const RobotId id{*team, static_cast<int>(r.id().id())};
+  const std::optional<RobotId> robot = ItemRobot(r.has_id(), r.id(), "robot_specs", errors);
+  if (!robot) return;
+  const RobotId id = *robot;
   if (!r.IsInitialized()) {
     errors.Add(codes::kMissingField, "robot_specs of " + Name(id) + " lacks " + r.InitializationErrorString() +
                                          "; not applied");
