@@ -270,7 +270,12 @@ void CollisionManager::SetBroadphase(Broadphase broadphase) {
   planes_only_.clear();
   if (space_) {
     dSpaceSetCleanup(space_.get(), 0);  // the scene graph owns the geometries
-    graph_.Root().ForEachGeom([this](GeomImpl& g) { File(g); });
+    // In creation order, the order they were filed in as they came: a world built anew from the
+    // same robots in the same order (a snapshot's) pairs as this one does.
+    std::vector<GeomImpl*> geoms;
+    graph_.Root().ForEachGeom([&geoms](GeomImpl& g) { geoms.push_back(&g); });
+    std::sort(geoms.begin(), geoms.end(), [](const GeomImpl* a, const GeomImpl* b) { return a->serial() < b->serial(); });
+    for (GeomImpl* g : geoms) File(*g);
   }
 }
 

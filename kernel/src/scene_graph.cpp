@@ -169,6 +169,7 @@ GeomImpl::GeomImpl(NodeImpl& owner, const GeomSpec& spec, BodyImpl* body)
       collides_(spec.collides),
       scope_(spec.scope),
       bounding_radius_(spec.shape.BoundingRadius()) {
+  serial_ = owner.graph().NextGeomSerial();
   for (const NodeImpl* n = &owner; n && !robot_; n = n->parent()) {
     if (n->is_robot()) robot_ = n;
   }

@@ -240,7 +240,6 @@ void World::Build() {
     p.model = EffectiveModel(base);
     robots_.push_back(std::make_unique<Robot>(p, p.id.team == Team::kBlue ? blue : yellow, registry_, log_, services));
   }
-  collision_->Refile();  // tree order, as after a robot comes or goes
   last_good_.Track(scene_->Root());
 }
 

@@ -93,7 +93,8 @@ class CollisionManager {
   CollisionManager(const CollisionManager&) = delete;
   CollisionManager& operator=(const CollisionManager&) = delete;
 
-  /// Switches the broadphase (files existing geometries into or out of the ODE space).
+  /// Switches the broadphase (files existing geometries into or out of the ODE space, in the
+  /// order they were created).
   void SetBroadphase(Broadphase broadphase);
   /// The broadphase in use.
   Broadphase broadphase() const { return broadphase_; }
@@ -114,9 +115,9 @@ class CollisionManager {
   void SetSweptBallStep(double dt) { swept_ball_step_ = dt; }
   /// Removes the contact joints of the last step.
   void ClearContacts();
-  /// Files every geometry anew, in scene-graph order, and drops every cache that may name one:
-  /// after the scene is built, and whenever robots come or go. The broadphase's pair order then
-  /// depends only on the tree, so a world rebuilt from a snapshot pairs as the original did.
+  /// Files every geometry anew (SetBroadphase: in creation order) and drops every cache that may
+  /// name one: whenever robots come or go. A world built anew from the same robots in the same
+  /// order (a snapshot's) then pairs as the original does.
   void Refile();
   /// Counters of the last Collide().
   const CollisionStats& stats() const { return stats_; }

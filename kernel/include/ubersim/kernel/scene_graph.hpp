@@ -80,6 +80,8 @@ class GeomImpl final : public Geom {
   NodeImpl& owner() const { return owner_; }                   ///< owning node
   bool collides() const { return collides_; }                  ///< takes part in collisions
   ContactScope scope() const { return scope_; }                ///< what it may touch
+  /// Orders geometries by creation (SceneGraph::NextGeomSerial).
+  std::uint64_t serial() const { return serial_; }
   bool is_plane() const { return shape_.kind == Shape::Kind::kPlane; }  ///< an infinite plane
   /// Directional-friction axis in the body frame, if any.
   const std::optional<Vec3>& friction_axis() const { return friction_axis_; }
@@ -124,6 +126,7 @@ class GeomImpl final : public Geom {
   BodyImpl* body_;
   bool collides_;
   ContactScope scope_;
+  std::uint64_t serial_ = 0;
   bool is_ball_ = false;
   double bounding_radius_;
   BoundingSphere cached_bounds_;
@@ -250,11 +253,14 @@ class SceneGraph {
   std::uint64_t NextBodySerial() { return ++bodies_created_; }
   /// Bodies created so far. A body lives as long as the graph: the same count, the same bodies.
   std::uint64_t bodies_created() const { return bodies_created_; }
+  /// A new geometry's serial (GeomImpl::serial): one more than the last.
+  std::uint64_t NextGeomSerial() { return ++geoms_created_; }
 
  private:
   dWorldID world_;
   std::uint64_t body_accumulations_ = 0;
   std::uint64_t bodies_created_ = 0;
+  std::uint64_t geoms_created_ = 0;
   std::function<void(GeomImpl&)> on_geom_added_;
   std::function<void(GeomImpl&)> on_geom_removed_;
   std::unique_ptr<NodeImpl> root_;
