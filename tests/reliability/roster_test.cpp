@@ -98,7 +98,8 @@ TEST(Roster, ARobotComesOnGoesOffAndComesBack) {
   EventAnswer a = Ask(world, Place(Team::kBlue, 7, true, Vec3(1.0, 1.5, 0)));
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
   EXPECT_EQ(world.robot_count(), 5u);
-  const RobotState* r = Find(world.Snapshot(), Team::kBlue, 7);
+  const WorldSnapshot came_on = world.Snapshot();
+  const RobotState* r = Find(came_on, Team::kBlue, 7);
   ASSERT_NE(r, nullptr);
   EXPECT_TRUE(r->present);
   EXPECT_NEAR(r->pose.position.x(), 1.0, 1e-9);
@@ -153,7 +154,8 @@ TEST(Roster, RobotSpecsRebuildTheRobotFromItsModelWithTheirValues) {
   const EventAnswer a = Ask(world, e);
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
   EXPECT_TRUE(a.unapplied.empty()) << a.unapplied.front();
-  const RobotState* r = Find(world.Snapshot(), Team::kYellow, 1);
+  const WorldSnapshot rebuilt = world.Snapshot();
+  const RobotState* r = Find(rebuilt, Team::kYellow, 1);
   ASSERT_NE(r, nullptr);
   EXPECT_DOUBLE_EQ(r->radius, 0.085);
   EXPECT_NEAR((r->pose.position - before).norm(), 0.0, 1e-9);  // where it was
