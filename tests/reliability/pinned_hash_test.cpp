@@ -1,0 +1,70 @@
+// SPDX-License-Identifier: Apache-2.0
+// Determinism pinned to known values (Box2D's EXPECTED_HASH): each shipped world after 2 s of
+// seeded random play, and after a snapshot taken there, restored into a fresh world and stepped
+// 1 s on. The values were recorded from this build; a change that moves any shipped world's
+// trajectory by one bit fails here and must say why it may (and record the new values).
+#include <cinttypes>
+#include <cstdio>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "../common/shipped_worlds.hpp"
+#include "bench.hpp"
+#include "ubersim/kernel/snapshot.hpp"
+#include "ubersim/kernel/world.hpp"
+
+namespace ubersim::kernel {
+namespace {
+
+struct Pinned {
+  const char* world;
+  std::uint64_t after_play;     // 2000 steps of RandomPlay(seed 7)
+  std::uint64_t after_restore;  // then 1000 steps more, also from the restored snapshot
+};
+
+constexpr Pinned kPinned[] = {
+    {"ssl-2003", 0x562b531feed8ff52ULL, 0x3dad22a0d0121807ULL},
+    {"div-b", 0xa03484e3a694f694ULL, 0x8072e0c4365dc740ULL},
+    {"div-a", 0x4865455c08f528dcULL, 0x127c034415b435b9ULL},
+};
+
+std::string Hex(std::uint64_t h) {
+  char text[24];
+  std::snprintf(text, sizeof text, "0x%016" PRIx64 "ULL", h);
+  return text;
+}
+
+class PinnedHash : public ::testing::TestWithParam<Pinned> {};
+
+TEST_P(PinnedHash, ShippedWorldsStepToTheRecordedStates) {
+  const Pinned& pinned = GetParam();
+  testing::ShippedWorlds s;
+  const WorldModel model = s.Load(pinned.world);
+  World world(model, s.registry, s.log, false);
+  bench::RandomPlay play(world, 7);
+  for (int i = 0; i < 2000; ++i) {
+    play.BeforeStep();
+    world.Step();
+  }
+  EXPECT_EQ(Hex(world.StateHash()), Hex(pinned.after_play)) << pinned.world << " after random play";
+  const SavedState saved = DecodeSnapshot(EncodeSnapshot(world.Save()), "memory");
+  for (int i = 0; i < 1000; ++i) world.Step();
+  World restored(model, s.registry, s.log, false);
+  restored.Restore(saved);
+  for (int i = 0; i < 1000; ++i) restored.Step();
+  EXPECT_EQ(Hex(world.StateHash()), Hex(pinned.after_restore)) << pinned.world << " stepping on";
+  EXPECT_EQ(Hex(restored.StateHash()), Hex(pinned.after_restore)) << pinned.world << " restored and stepped on";
+}
+
+INSTANTIATE_TEST_SUITE_P(ShippedWorlds, PinnedHash, ::testing::ValuesIn(kPinned),
+                         [](const ::testing::TestParamInfo<Pinned>& info) {
+                           std::string name = info.param.world;
+                           for (char& c : name) {
+                             if (c == '-') c = '_';
+                           }
+                           return name;
+                         });
+
+}  // namespace
+}  // namespace ubersim::kernel
