@@ -597,8 +597,12 @@ void World::Apply(const RobotSpecEvent& e) {
     SpecOutcome o = Loader().ApplySpec(*base, e.spec);
     for (std::string& error : o.errors) answer.errors.push_back("robot " + Describe(id) + ": " + error);
     answer.unapplied = std::move(o.unmapped);
-    if (o.model) {
-      const auto key = std::make_pair(static_cast<int>(id.team), id.id);
+    const auto key = std::make_pair(static_cast<int>(id.team), id.id);
+    const auto known = specs_.find(key);
+    // A team announces its specs again and again (ssl-simulation-controller): the robot is
+    // rebuilt only when they change.
+    const bool same = known != specs_.end() && known->second == e.spec;
+    if (o.model && !same) {
       specs_[key] = e.spec;
       spec_models_[key] = {base, o.model};
       if (Robot* r = FindRobot(id)) RebuildRobot(*r, answer);

@@ -159,6 +159,11 @@ TEST(Roster, RobotSpecsRebuildTheRobotFromItsModelWithTheirValues) {
   ASSERT_NE(r, nullptr);
   EXPECT_DOUBLE_EQ(r->radius, 0.085);
   EXPECT_NEAR((r->pose.position - before).norm(), 0.0, 1e-9);  // where it was
+  // The same spec again (a controller repeats them) rebuilds nothing: the robot keeps moving.
+  Drive(world, {Forward(Team::kYellow, 1, 0.5)}, 300);
+  const std::uint64_t before_repeat = world.StateHash();
+  EXPECT_TRUE(Ask(world, e).errors.empty());
+  EXPECT_EQ(world.StateHash(), before_repeat);
   // Its drive now tops out at 1 m/s however hard it is pushed; another robot does not.
   Drive(world, {Forward(Team::kYellow, 0, 3.0), Forward(Team::kYellow, 1, 3.0)}, 1500);
   const WorldSnapshot now = world.Snapshot();

@@ -79,6 +79,8 @@ struct RobotSpec {
   /// the drive's wheels.
   std::optional<std::vector<double>> wheel_angles;
   std::optional<double> dribbler_width;            ///< usable width of the dribbler bar, m
+  /// Equality on every field.
+  friend bool operator==(const RobotSpec&, const RobotSpec&) = default;
 };
 
 /// Robot spec event: from now on robot `robot` is built from its team's robot model with `spec`
