@@ -152,7 +152,12 @@ class SslVisionTransport final : public ubersim::Transport {
     if (value < 1 || value > 65535) throw ubersim::PluginError("vision_port " + std::to_string(value) + " is not a port");
     MulticastSender::Options o = options_;
     o.port = static_cast<std::uint16_t>(value);
-    auto next = std::make_unique<MulticastSender>(o);  // throws PluginError-worthy runtime_error on failure
+    std::unique_ptr<MulticastSender> next;
+    try {
+      next = std::make_unique<MulticastSender>(o);
+    } catch (const std::runtime_error& e) {
+      throw ubersim::PluginError(e.what());  // a refusal of the value, not a fault: the old port stays
+    }
     {
       std::lock_guard lock(send_mutex_);
       std::swap(sender_, next);
