@@ -5,6 +5,7 @@
 // trajectory by one bit fails here and must say why it may (and record the new values).
 #include <cinttypes>
 #include <cstdio>
+#include <ostream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -28,6 +29,9 @@ constexpr Pinned kPinned[] = {
     {"div-b", 0xa03484e3a694f694ULL, 0x8072e0c4365dc740ULL},
     {"div-a", 0x4865455c08f528dcULL, 0x127c034415b435b9ULL},
 };
+
+// The world's name in gtest's output, not the struct's bytes.
+void PrintTo(const Pinned& p, std::ostream* out) { *out << p.world; }
 
 std::string Hex(std::uint64_t h) {
   char text[24];
