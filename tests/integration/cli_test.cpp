@@ -66,29 +66,31 @@ TEST(Cli, ValidateReportsFileLineColumnAndKey) {
   fs::remove_all(dir);
 }
 
+// Every run of a shipped world here is --local-only: outside a network namespace of its own a
+// test never sends on the machine's interfaces (the shipped worlds send on the default route's).
 TEST(Cli, RunsTheDefaultWorldFastForAFixedDuration) {
-  const Result r = RunUbersim("run --fast --duration 2 --quiet");
+  const Result r = RunUbersim("run --fast --duration 2 --quiet --local-only");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("world 'div-b'"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("stopped at sim time 2"), std::string::npos) << r.output;
 }
 
 TEST(Cli, RunPrintsTheViewersAddressAndNoViewerLeavesItOut) {
-  const Result with = RunUbersim("run --fast --duration 0.5 --quiet");
+  const Result with = RunUbersim("run --fast --duration 0.5 --quiet --local-only");
   EXPECT_EQ(with.exit_code, 0) << with.output;
   EXPECT_NE(with.output.find("http://127.0.0.1:8080/ (open it in a browser)"), std::string::npos) << with.output;
 
-  const Result without = RunUbersim("run --fast --duration 0.5 --quiet --no-viewer");
+  const Result without = RunUbersim("run --fast --duration 0.5 --quiet --no-viewer --local-only");
   EXPECT_EQ(without.exit_code, 0) << without.output;
   EXPECT_EQ(without.output.find("http://"), std::string::npos) << without.output;
   EXPECT_NE(without.output.find("transport viewer not started (--no-viewer)"), std::string::npos) << without.output;
 
-  const Result grsim_off = RunUbersim("run --fast --duration 0.5 --quiet --no-transport grsim");
+  const Result grsim_off = RunUbersim("run --fast --duration 0.5 --quiet --no-transport grsim --local-only");
   EXPECT_EQ(grsim_off.exit_code, 0) << grsim_off.output;
   EXPECT_EQ(grsim_off.output.find("udp 127.0.0.1:20011"), std::string::npos) << grsim_off.output;
   EXPECT_NE(grsim_off.output.find("http://127.0.0.1:8080/"), std::string::npos) << grsim_off.output;
 
-  const Result typo = RunUbersim("run --fast --duration 0.5 --quiet --no-transport grsm");
+  const Result typo = RunUbersim("run --fast --duration 0.5 --quiet --no-transport grsm --local-only");
   EXPECT_EQ(typo.exit_code, 2) << typo.output;
   EXPECT_NE(typo.output.find("--no-transport grsm: the world has no such transport"), std::string::npos)
       << typo.output;
