@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ubersim/kernel/ode_state.hpp"
 
+#include "fnv1a.hpp"
+
 #include <algorithm>
 #include <cstring>
 #include <unordered_map>
@@ -85,22 +87,12 @@ void CollectMoves(dSpaceID space, std::vector<dBodyID>& moved) {
   }
 }
 
-void HashDouble(std::uint64_t& h, double v) {
-  unsigned char bytes[sizeof v];
-  std::memcpy(bytes, &v, sizeof v);
-  for (unsigned char b : bytes) {
-    h ^= b;
-    h *= 1099511628211ULL;
-  }
-}
+void HashDouble(std::uint64_t& h, double v) { Fnv1a(h, &v, sizeof v); }
 
 void HashText(std::uint64_t& h, const std::string& s) {
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 1099511628211ULL;
-  }
-  h ^= 0xff;  // ends the string: "ab","c" differs from "a","bc"
-  h *= 1099511628211ULL;
+  Fnv1a(h, s.data(), s.size());
+  const unsigned char end = 0xff;  // ends the string: "ab","c" differs from "a","bc"
+  Fnv1a(h, &end, 1);
 }
 
 }  // namespace
@@ -248,7 +240,7 @@ void ApplyOdeState(SceneGraph& graph, const SavedState& in) {
 }
 
 std::uint64_t SceneDigest(const SceneGraph& graph) {
-  std::uint64_t h = 1469598103934665603ULL;
+  std::uint64_t h = kFnv1aOffset;
   auto visit = [&](const NodeImpl& node, const std::string& path) {
     HashText(h, path);
     for (const auto& b : node.bodies()) {

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ubersim/kernel/snapshot.hpp"
 
+#include "fnv1a.hpp"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -497,14 +499,9 @@ SavedState ReadSnapshotFile(const std::filesystem::path& file) {
 std::uint64_t FileDigest(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) return 0;
-  std::uint64_t h = 1469598103934665603ULL;
+  std::uint64_t h = kFnv1aOffset;
   char buffer[65536];
-  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
-    for (std::streamsize i = 0; i < in.gcount(); ++i) {
-      h ^= static_cast<unsigned char>(buffer[i]);
-      h *= 1099511628211ULL;
-    }
-  }
+  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) Fnv1a(h, buffer, static_cast<std::size_t>(in.gcount()));
   return h;
 }
 

@@ -13,6 +13,7 @@
 #include "ubersim/kernel/field_builder.hpp"
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/state_check.hpp"
+#include "fnv1a.hpp"
 #include "robot.hpp"
 
 namespace ubersim::kernel {
@@ -26,14 +27,6 @@ std::int64_t ElapsedNs(SteadyClock::time_point since) {
 
 bool Finite(const std::optional<Vec3>& v) { return !v || v->allFinite(); }
 
-// FNV-1a over raw bytes: equal hashes mean bit-identical doubles.
-void HashBytes(std::uint64_t& h, const void* data, std::size_t n) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= p[i];
-    h *= 1099511628211ULL;
-  }
-}
 
 std::string Describe(const RobotId& id) {
   return std::string(ToString(id.team)) + " " + std::to_string(id.id);
@@ -880,15 +873,15 @@ WorldSnapshot World::Snapshot() const {
 }
 
 std::uint64_t World::StateHash() const {
-  std::uint64_t h = 1469598103934665603ULL;
+  std::uint64_t h = kFnv1aOffset;
   const std::int64_t steps = clock_.steps();
-  HashBytes(h, &steps, sizeof steps);
+  Fnv1a(h, &steps, sizeof steps);
   scene_->Root().ForEachBody([&](BodyImpl& b) {
     const dBodyID id = b.id();
-    HashBytes(h, dBodyGetPosition(id), 3 * sizeof(dReal));
-    HashBytes(h, dBodyGetQuaternion(id), 4 * sizeof(dReal));
-    HashBytes(h, dBodyGetLinearVel(id), 3 * sizeof(dReal));
-    HashBytes(h, dBodyGetAngularVel(id), 3 * sizeof(dReal));
+    Fnv1a(h, dBodyGetPosition(id), 3 * sizeof(dReal));
+    Fnv1a(h, dBodyGetQuaternion(id), 4 * sizeof(dReal));
+    Fnv1a(h, dBodyGetLinearVel(id), 3 * sizeof(dReal));
+    Fnv1a(h, dBodyGetAngularVel(id), 3 * sizeof(dReal));
   });
   return h;
 }

@@ -8,6 +8,7 @@
 #include "ubersim/kernel/ode_state.hpp"
 #include "ubersim/kernel/snapshot.hpp"
 #include "ubersim/kernel/world.hpp"
+#include "fnv1a.hpp"
 #include "robot.hpp"
 
 #ifndef UBERSIM_VERSION
@@ -17,17 +18,10 @@
 namespace ubersim::kernel {
 namespace {
 
-void Mix(std::uint64_t& h, const void* data, std::size_t n) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= p[i];
-    h *= 1099511628211ULL;
-  }
-}
-void Mix(std::uint64_t& h, double v) { Mix(h, &v, sizeof v); }
+void Mix(std::uint64_t& h, double v) { Fnv1a(h, &v, sizeof v); }
 void Mix(std::uint64_t& h, const std::string& s) {
-  Mix(h, s.data(), s.size());
-  Mix(h, "", 1);
+  Fnv1a(h, s.data(), s.size());
+  Fnv1a(h, "", 1);  // ends the string
 }
 
 // The files the world was built from, as the model names them (code-built models name none).

@@ -6,6 +6,7 @@
 
 #include <rapidjson/document.h>
 
+#include "../fnv1a.hpp"
 #include "model_internal.hpp"
 
 namespace ubersim::kernel::model_detail {
@@ -77,13 +78,6 @@ ParamNode* Member(ParamNode& object, const std::string& key) {
   return nullptr;
 }
 
-void Mix(std::uint64_t& h, const void* data, std::size_t n) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= p[i];
-    h *= 1099511628211ULL;
-  }
-}
 
 }  // namespace
 
@@ -162,15 +156,15 @@ std::string DescribeField(const RobotSpec& spec, const std::string& field) {
 }
 
 std::uint64_t SpecDigest(const RobotSpec& spec) {
-  std::uint64_t h = 1469598103934665603ULL;
+  std::uint64_t h = kFnv1aOffset;
   for (const FieldInfo& f : kScalars) {
     const std::optional<double>& v = spec.*f.member;
     const char set = v ? 1 : 0;
-    Mix(h, &set, 1);
-    if (v) Mix(h, &*v, sizeof(double));
+    Fnv1a(h, &set, 1);
+    if (v) Fnv1a(h, &*v, sizeof(double));
   }
   if (spec.wheel_angles) {
-    for (double a : *spec.wheel_angles) Mix(h, &a, sizeof a);
+    for (double a : *spec.wheel_angles) Fnv1a(h, &a, sizeof a);
   }
   return h;
 }
