@@ -80,7 +80,7 @@ FaultPolicy ParseFaultPolicy(const std::string& name) {
 const char* ToString(FaultPolicy policy) { return policy == FaultPolicy::kStop ? "stop" : "disable"; }
 
 std::string PluginFault::Describe() const {
-  std::string who = robot ? "robot " + std::string(ToString(robot->team)) + " " + std::to_string(robot->id) : "world";
+  std::string who = robot ? "robot " + ToString(*robot) : "world";
   if (!plugin.empty()) {
     who = (robot ? who + " " : std::string()) + ToString(kind) + " '" + plugin + "'";
     if (!file.empty()) who += " (" + file + ")";

@@ -111,7 +111,7 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
              Log& log, const RobotServices& services)
     : id_(placement.id),
       services_(services),
-      log_(log, std::string("robot ") + ToString(placement.id.team) + " " + std::to_string(placement.id.id)),
+      log_(log, "robot " + ToString(placement.id)),
       model_(placement.model),
       present_(placement.present) {
   const RobotModel& m = *model_;

@@ -28,9 +28,6 @@ std::int64_t ElapsedNs(SteadyClock::time_point since) {
 bool Finite(const std::optional<Vec3>& v) { return !v || v->allFinite(); }
 
 
-std::string Describe(const RobotId& id) {
-  return std::string(ToString(id.team)) + " " + std::to_string(id.id);
-}
 
 }  // namespace
 
@@ -227,7 +224,7 @@ void World::Build() {
   team_nodes_[1] = &yellow;
   for (const RobotPlacement& base : roster_) {
     if (FindRobot(base.id)) {
-      throw std::runtime_error(model_.file + ": robot " + Describe(base.id) + " is placed twice");
+      throw std::runtime_error(model_.file + ": robot " + ToString(base.id) + " is placed twice");
     }
     RobotPlacement p = base;
     p.model = EffectiveModel(base);
@@ -254,7 +251,7 @@ std::shared_ptr<const RobotModel> World::EffectiveModel(const RobotPlacement& pl
     SpecOutcome o = Loader().ApplySpec(*placement.model, spec->second);
     if (!o.model) {
       // Accepted for another base model; this one refuses it.
-      log_.Warning("robot " + Describe(placement.id) + ": its robot specs do not fit model '" + placement.model->name +
+      log_.Warning("robot " + ToString(placement.id) + ": its robot specs do not fit model '" + placement.model->name +
                    "' (" + (o.errors.empty() ? std::string("?") : o.errors.front()) + "); built without them");
       return placement.model;
     }
@@ -309,14 +306,14 @@ Robot* World::ComeOn(const PositionEvent& e, EventAnswer& answer) {
   const std::shared_ptr<const RobotModel> model = BaseModel(id);
   const double half_x = 0.5 * field_geometry_.carpet_length, half_y = 0.5 * field_geometry_.carpet_width;
   if (id.id < 0 || id.id > 15) {
-    answer.errors.push_back("robot " + Describe(id) + ": robot ids are 0..15");
+    answer.errors.push_back("robot " + ToString(id) + ": robot ids are 0..15");
   } else if (!model) {
-    answer.errors.push_back("robot " + Describe(id) + ": the world names no robot model for team " +
+    answer.errors.push_back("robot " + ToString(id) + ": the world names no robot model for team " +
                             ToString(id.team) + " (teams." + ToString(id.team) + ".model)");
   } else if (!e.position) {
-    answer.errors.push_back("robot " + Describe(id) + " is not in the world: a position is needed to put it on");
+    answer.errors.push_back("robot " + ToString(id) + " is not in the world: a position is needed to put it on");
   } else if (std::abs(e.position->x()) > half_x || std::abs(e.position->y()) > half_y) {
-    answer.errors.push_back("robot " + Describe(id) + ": (" + std::to_string(e.position->x()) + ", " +
+    answer.errors.push_back("robot " + ToString(id) + ": (" + std::to_string(e.position->x()) + ", " +
                             std::to_string(e.position->y()) + ") m lies outside the walls");
   }
   if (!answer.errors.empty()) return nullptr;
@@ -328,10 +325,10 @@ Robot* World::ComeOn(const PositionEvent& e, EventAnswer& answer) {
   p.yaw = e.yaw.value_or(id.team == Team::kBlue ? 0.0 : M_PI);
   try {
     Robot& r = AddRobot(p);
-    log_.Info("robot " + Describe(id) + " came on (" + r.model().name + ")");
+    log_.Info("robot " + ToString(id) + " came on (" + r.model().name + ")");
     return &r;
   } catch (const std::exception& ex) {
-    answer.errors.push_back("robot " + Describe(id) + " could not be built: " + ExceptionText(ex));
+    answer.errors.push_back("robot " + ToString(id) + " could not be built: " + ExceptionText(ex));
   }
   return nullptr;
 }
@@ -354,7 +351,7 @@ void World::RebuildRobot(Robot& robot, EventAnswer& answer) {
   try {
     built = &AddRobot(p);
   } catch (const std::exception& ex) {
-    answer.errors.push_back("robot " + Describe(id) + " could not be rebuilt: " + ExceptionText(ex));
+    answer.errors.push_back("robot " + ToString(id) + " could not be rebuilt: " + ExceptionText(ex));
   }
   if (!built) {
     specs_.erase({static_cast<int>(id.team), id.id});  // the robot as it was
@@ -503,7 +500,7 @@ void World::Apply(const CommandEvent& e) {
   Robot* r = FindRobot(e.robot);
   if (!r) {
     ++event_counters_.rejected;
-    log_.Warning("command for unknown robot " + Describe(e.robot) + " ignored");
+    log_.Warning("command for unknown robot " + ToString(e.robot) + " ignored");
     return;
   }
   bool finite = !e.dribbler_speed || std::isfinite(*e.dribbler_speed);
@@ -525,7 +522,7 @@ void World::Apply(const CommandEvent& e) {
   }
   if (!finite) {
     ++event_counters_.rejected;
-    log_.Warning("command for robot " + Describe(e.robot) + " with non-finite values ignored");
+    log_.Warning("command for robot " + ToString(e.robot) + " with non-finite values ignored");
     return;
   }
   if (!radio_.Send(e, sim_time_ns_)) ++event_counters_.lost;
@@ -538,7 +535,7 @@ void World::Deliver(const CommandEvent& e) {
     ++event_counters_.applied;
   } else {
     ++event_counters_.rejected;
-    log_.Warning("command for robot " + Describe(e.robot) + " partly refused: " + why);
+    log_.Warning("command for robot " + ToString(e.robot) + " partly refused: " + why);
   }
 }
 
@@ -581,14 +578,14 @@ void World::Apply(const RobotSpecEvent& e) {
   const RobotId& id = e.robot;
   const std::shared_ptr<const RobotModel> base = BaseModel(id);
   if (id.id < 0 || id.id > 15) {
-    answer.errors.push_back("robot " + Describe(id) + ": robot ids are 0..15");
+    answer.errors.push_back("robot " + ToString(id) + ": robot ids are 0..15");
   } else if (SpecIsEmpty(e.spec)) {
     // Nothing over the model: nothing to rebuild.
   } else if (!base) {
-    answer.errors.push_back("robot " + Describe(id) + ": the world names no robot model for team " + ToString(id.team));
+    answer.errors.push_back("robot " + ToString(id) + ": the world names no robot model for team " + ToString(id.team));
   } else {
     SpecOutcome o = Loader().ApplySpec(*base, e.spec);
-    for (std::string& error : o.errors) answer.errors.push_back("robot " + Describe(id) + ": " + error);
+    for (std::string& error : o.errors) answer.errors.push_back("robot " + ToString(id) + ": " + error);
     answer.unapplied = std::move(o.unmapped);
     const auto key = std::make_pair(static_cast<int>(id.team), id.id);
     const auto known = specs_.find(key);

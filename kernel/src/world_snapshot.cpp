@@ -56,7 +56,6 @@ std::string NowUtc() {
   return text;
 }
 
-std::string Name(const RobotId& id) { return std::string(ToString(id.team)) + " " + std::to_string(id.id); }
 
 }  // namespace
 
@@ -73,7 +72,7 @@ std::uint64_t World::StructureDigest() const {
   if (p.solver_iterations_without_ball) Mix(h, static_cast<double>(*p.solver_iterations_without_ball));
   Mix(h, p.broadphase);
   for (const auto& r : robots_) {
-    Mix(h, Name(r->id()));
+    Mix(h, ToString(r->id()));
     Mix(h, r->model().name);  // names the robot specs over the model, when there are
   }
   Mix(h, static_cast<double>(perception_.model().cameras.size()));
@@ -144,7 +143,7 @@ void World::Restore(const SavedState& s) {
       p.yaw = (*saved.built_at)[2];
     }
     if (!p.model) {
-      throw SnapshotError("the snapshot's robot " + Name(saved.id) + " was built from " +
+      throw SnapshotError("the snapshot's robot " + ToString(saved.id) + " was built from " +
                           (saved.model_file.empty() ? std::string("a model") : saved.model_file) + ", which " + ours +
                           " does not name (neither among its robots nor as a team's model)");
     }

@@ -51,7 +51,7 @@ RobotState Bench::Robot(const RobotId& id) const {
   for (const RobotState& r : world_->Snapshot().robots) {
     if (r.id == id) return r;
   }
-  throw std::out_of_range("no robot " + std::string(ToString(id.team)) + " " + std::to_string(id.id));
+  throw std::out_of_range("no robot " + ToString(id));
 }
 
 void Bench::Apply(Event e) {

@@ -442,8 +442,7 @@ struct ModelLoader::Impl {
         p.present = e.GetBool("present", true);
         const auto key = std::make_pair(static_cast<int>(p.id.team), p.id.id);
         if (const auto it = placed.find(key); it != placed.end()) {
-          throw ErrorAt(e["id"], std::string("robot ") + ToString(p.id.team) + " " +
-                                     std::to_string(p.id.id) + " is already placed at line " +
+          throw ErrorAt(e["id"], "robot " + ToString(p.id) + " is already placed at line " +
                                      std::to_string(it->second));
         }
         placed[key] = e.Node().line;

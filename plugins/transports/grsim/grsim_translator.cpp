@@ -24,7 +24,7 @@ std::string CheckRobot(const RobotId& id, const WorldView& world) {
   if (std::find(world.robots.begin(), world.robots.end(), id) != world.robots.end()) return {};
   const RobotId other{id.team == Team::kBlue ? Team::kYellow : Team::kBlue, id.id};
   const bool other_team = std::find(world.robots.begin(), world.robots.end(), other) != world.robots.end();
-  return "no " + Describe(id) + " in this world" + (other_team ? " (wrong team? there is a " + Describe(other) + ")" : "");
+  return "no " + ToString(id) + " in this world" + (other_team ? " (wrong team? there is a " + ToString(other) + ")" : "");
 }
 
 std::string CheckOnCarpet(double x, double y, const WorldView& world) {
@@ -35,7 +35,6 @@ std::string CheckOnCarpet(double x, double y, const WorldView& world) {
 
 }  // namespace
 
-std::string Describe(const RobotId& id) { return std::string(ToString(id.team)) + " " + std::to_string(id.id); }
 
 void Translator::Translate(const grSim_Packet& packet, const WorldView& world, std::vector<Event>& events,
                            std::vector<std::string>& rejects) {
@@ -52,7 +51,7 @@ void Translator::Translate(const grSim_Packet& packet, const WorldView& world, s
 void Translator::Command(const grSim_Robot_Command& c, Team team, const WorldView& world,
                          std::vector<Event>& events, std::vector<std::string>& rejects) {
   const RobotId id{team, static_cast<int>(std::min<std::uint32_t>(c.id(), 1000000))};
-  const std::string where = "command for " + Describe(id) + ": ";
+  const std::string where = "command for " + ToString(id) + ": ";
   if (std::string why = CheckRobot(id, world); !why.empty()) {
     rejects.push_back(where + why);
     return;
@@ -126,7 +125,7 @@ void Translator::Ball(const grSim_BallReplacement& b, const WorldView& world, st
 void Translator::Robot(const grSim_RobotReplacement& r, const WorldView& world, std::vector<Event>& events,
                        std::vector<std::string>& rejects) {
   const RobotId id{r.yellowteam() ? Team::kYellow : Team::kBlue, static_cast<int>(std::min<std::uint32_t>(r.id(), 1000000))};
-  const std::string where = "replacement of " + Describe(id) + ": ";
+  const std::string where = "replacement of " + ToString(id) + ": ";
   if (id.id > 15) {
     rejects.push_back(where + "robot ids are 0..15");
     return;

@@ -78,7 +78,4 @@ class StatusTracker {
   std::vector<Entry> entries_;
 };
 
-/// "blue 3" / "yellow 0".
-std::string Describe(const RobotId& id);
-
 }  // namespace ubersim::grsim

@@ -13,7 +13,6 @@
 namespace ubersim::ssl_simulation {
 namespace {
 
-std::string Name(const RobotId& id) { return std::string(ToString(id.team)) + " " + std::to_string(id.id); }
 
 // Collects one error per skipped item.
 class Errors {
@@ -106,19 +105,19 @@ void MapTeleportRobot(const TeleportRobot& t, const RobotLookup& robots, Errors&
   // (a client clearing ids 0..15 out of the way moves the robots there are and nothing else).
   if (where != Presence::kOnField && !on) return;
   if (t.by_force()) {
-    errors.Add(codes::kByForce, "teleport_robot.by_force is not supported; " + Name(id) + " was not moved");
+    errors.Add(codes::kByForce, "teleport_robot.by_force is not supported; " + ToString(id) + " was not moved");
     return;
   }
   if (!AllFinite({t.x(), t.y(), t.orientation(), t.v_x(), t.v_y(), t.v_angular()})) {
-    errors.Add(codes::kNonFinite, "teleport_robot for " + Name(id) + " has a NaN or infinite value; it was not moved");
+    errors.Add(codes::kNonFinite, "teleport_robot for " + ToString(id) + " has a NaN or infinite value; it was not moved");
     return;
   }
   if (t.has_x() != t.has_y()) {
-    errors.Add(codes::kPartialCoord, "teleport_robot for " + Name(id) + " needs x and y together; it was not moved");
+    errors.Add(codes::kPartialCoord, "teleport_robot for " + ToString(id) + " needs x and y together; it was not moved");
     return;
   }
   if (where == Presence::kAbsent && !t.has_x()) {
-    errors.Add(codes::kCreateNoPosition, "robot " + Name(id) + " is not in the world: present needs x and y to put it on");
+    errors.Add(codes::kCreateNoPosition, "robot " + ToString(id) + " is not in the world: present needs x and y to put it on");
     return;
   }
   PositionEvent e;
@@ -203,7 +202,7 @@ void MapRobotSpecs(const RobotSpecs& r, const MappingOptions& options, Errors& e
   if (!robot) return;
   const RobotId id = *robot;
   if (!r.IsInitialized()) {
-    errors.Add(codes::kMissingField, "robot_specs of " + Name(id) + " lacks " + r.InitializationErrorString() +
+    errors.Add(codes::kMissingField, "robot_specs of " + ToString(id) + " lacks " + r.InitializationErrorString() +
                                          "; not applied");
     return;
   }
@@ -237,7 +236,7 @@ void MapRobotSpecs(const RobotSpecs& r, const MappingOptions& options, Errors& e
     const RobotWheelAngles& w = r.wheel_angles();
     const double clockwise[4] = {w.front_right(), w.back_right(), w.back_left(), w.front_left()};
     if (options.wheel_order.size() != 4) {
-      errors.Add(codes::kUnmappedSpec, "robot_specs of " + Name(id) +
+      errors.Add(codes::kUnmappedSpec, "robot_specs of " + ToString(id) +
                                            ": wheel_angles not applied (this world sets no wheel_velocity_order)");
     } else {
       std::vector<double> ccw(4, 0.0);
@@ -259,7 +258,7 @@ void MapRobotSpecs(const RobotSpecs& r, const MappingOptions& options, Errors& e
     }
     RobotSpecErForce erforce;
     if (!erforce.ParseFromString(any.value())) {
-      errors.Add(codes::kUnreadable, "robot_specs of " + Name(id) + ": RobotSpecErForce does not parse; not applied");
+      errors.Add(codes::kUnreadable, "robot_specs of " + ToString(id) + ": RobotSpecErForce does not parse; not applied");
       return;
     }
     take(erforce.has_dribbler_width(), erforce.dribbler_width(), spec.dribbler_width);
@@ -271,7 +270,7 @@ void MapRobotSpecs(const RobotSpecs& r, const MappingOptions& options, Errors& e
       if (!spec.center_to_dribbler) {
         spec.center_to_dribbler = front;
       } else if (std::abs(*spec.center_to_dribbler - front) > 0.001) {
-        errors.Add(codes::kUnmappedSpec, "robot_specs of " + Name(id) + ": RobotSpecErForce.shoot_radius " +
+        errors.Add(codes::kUnmappedSpec, "robot_specs of " + ToString(id) + ": RobotSpecErForce.shoot_radius " +
                                              std::to_string(erforce.shoot_radius()) +
                                              " m not applied: center_to_dribbler sets the front");
       }
@@ -280,12 +279,12 @@ void MapRobotSpecs(const RobotSpecs& r, const MappingOptions& options, Errors& e
   if (!unknown.empty()) {
     std::string list;
     for (const auto& u : unknown) list += (list.empty() ? "'" : ", '") + u + "'";
-    errors.Add(codes::kUnmappedSpec, "robot_specs of " + Name(id) + ": custom spec types not known: " + list +
+    errors.Add(codes::kUnmappedSpec, "robot_specs of " + ToString(id) + ": custom spec types not known: " + list +
                                          " (RobotSpecErForce is)");
   }
   for (double v : values) {
     if (!std::isfinite(v)) {
-      errors.Add(codes::kNonFinite, "robot_specs of " + Name(id) + " has a NaN or infinite value; not applied");
+      errors.Add(codes::kNonFinite, "robot_specs of " + ToString(id) + " has a NaN or infinite value; not applied");
       return;
     }
   }
@@ -353,7 +352,7 @@ std::optional<MoveCommand> MapMove(const RobotMoveCommand& m, const MappingOptio
     case RobotMoveCommand::kWheelVelocity: {
       const MoveWheelVelocity& w = m.wheel_velocity();
       if (options.wheel_order.size() != 4) {
-        errors.Add(codes::kWheelVelocity, "wheel_velocity is switched off in this world (move of " + Name(id) +
+        errors.Add(codes::kWheelVelocity, "wheel_velocity is switched off in this world (move of " + ToString(id) +
                                                " not applied)");
         return std::nullopt;
       }
@@ -366,7 +365,7 @@ std::optional<MoveCommand> MapMove(const RobotMoveCommand& m, const MappingOptio
     }
     case RobotMoveCommand::COMMAND_NOT_SET: break;
   }
-  errors.Add(codes::kMissingField, "move_command of " + Name(id) + " names no command; its command was skipped");
+  errors.Add(codes::kMissingField, "move_command of " + ToString(id) + " names no command; its command was skipped");
   return std::nullopt;
 }
 
@@ -429,22 +428,22 @@ MappedRobotControl MapRobotControl(const RobotControl& control, Team team, const
     for (std::uint32_t seen : out.commanded_ids) named = named || seen == rc.id();
     if (!named) out.commanded_ids.push_back(rc.id());
     if (rc.id() > kMaxRobotId || robots(id) != Presence::kOnField) {
-      errors.Add(codes::kUnknownRobot, "no robot " + Name(id) + " on the field; its command was skipped");
+      errors.Add(codes::kUnknownRobot, "no robot " + ToString(id) + " on the field; its command was skipped");
       continue;
     }
     if (!rc.IsInitialized()) {
-      errors.Add(codes::kMissingField, "command for " + Name(id) + " lacks " + rc.InitializationErrorString() +
+      errors.Add(codes::kMissingField, "command for " + ToString(id) + " lacks " + rc.InitializationErrorString() +
                                            "; it was skipped");
       continue;
     }
     if (!AllFinite({rc.kick_speed(), rc.kick_angle(), rc.dribbler_speed()}) ||
         (rc.has_move_command() && !FiniteMove(rc.move_command()))) {
-      errors.Add(codes::kNonFinite, "command for " + Name(id) + " has a NaN or infinite value; it was skipped");
+      errors.Add(codes::kNonFinite, "command for " + ToString(id) + " has a NaN or infinite value; it was skipped");
       continue;
     }
     if (rc.has_kick_speed() && rc.kick_speed() != 0.0f &&
         (rc.kick_speed() < 0 || rc.kick_angle() < 0 || rc.kick_angle() >= 90)) {
-      errors.Add(codes::kInvalidValue, "kick of " + Name(id) +
+      errors.Add(codes::kInvalidValue, "kick of " + ToString(id) +
                                            ": kick_speed must be >= 0 and kick_angle in [0, 90) degrees; its command was skipped");
       continue;
     }
@@ -471,7 +470,7 @@ std::vector<WireError> AnswerErrors(const Event& event, const EventAnswer& answe
   std::string what = "TeleportRobot";
   if (const auto* s = std::get_if<RobotSpecEvent>(&event)) {
     code = codes::kInvalidSpec;
-    what = "robot_specs of " + Name(s->robot);
+    what = "robot_specs of " + ToString(s->robot);
   } else if (std::holds_alternative<FieldEvent>(event)) {
     code = codes::kGeometry;
     what = "geometry";

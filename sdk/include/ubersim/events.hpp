@@ -27,6 +27,9 @@ struct RobotId {
   friend bool operator==(const RobotId&, const RobotId&) = default;
 };
 
+/// "blue 3", "yellow 0": how every message names a robot.
+inline std::string ToString(const RobotId& id) { return std::string(ToString(id.team)) + " " + std::to_string(id.id); }
+
 /// What an event is about: the ball or one robot.
 struct Target {
   bool is_ball = true;   ///< true: the ball; false: `robot`
