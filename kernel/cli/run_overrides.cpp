@@ -101,10 +101,7 @@ void UseField(const std::string& asked, WorldModel& world, const ModelLoader& lo
   world.ball_start.x() *= sx;
   world.ball_start.y() *= sy;
   // As many cameras, as high, over the new carpet.
-  const auto& cameras = world.perception.cameras;
-  const double height = cameras.empty() ? 6.0 : cameras.front().position.z();
-  world.perception.cameras = CameraGrid(static_cast<int>(std::max<std::size_t>(1, cameras.size())), to.carpet_length,
-                                        to.carpet_width, height);
+  world.perception.cameras = CamerasOver(world.perception.cameras, to);
   world.other_fields.push_back(world.field);  // a client may switch back
   world.field = field;
 }

@@ -657,10 +657,7 @@ void World::UseField(std::shared_ptr<const FieldModel> field) {
   model_.field = std::move(field);
   field_geometry_ = model_.field->geometry;  // in place: the transports hold a reference
   // As many cameras, as high, over the new carpet.
-  const std::vector<CameraModel>& now = perception_.model().cameras;
-  const double height = now.empty() ? 6.0 : now.front().position.z();
-  perception_.SetCameras(CameraGrid(static_cast<int>(std::max<std::size_t>(1, now.size())),
-                                    field_geometry_.carpet_length, field_geometry_.carpet_width, height));
+  perception_.SetCameras(CamerasOver(perception_.model().cameras, field_geometry_));
 }
 
 void World::ChangeField(std::shared_ptr<const FieldModel> field) {

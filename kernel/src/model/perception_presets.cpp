@@ -2,6 +2,7 @@
 // The vision and radio presets and the default camera layout (read by the model loader).
 #include "ubersim/kernel/perception.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <sstream>
 #include <string>
@@ -163,6 +164,12 @@ std::vector<CameraModel> CameraGrid(int count, double length, double width, doub
     }
   }
   return cameras;
+}
+
+std::vector<CameraModel> CamerasOver(const std::vector<CameraModel>& now, const FieldGeometry& field) {
+  const double height = now.empty() ? 6.0 : now.front().position.z();
+  return CameraGrid(static_cast<int>(std::max<std::size_t>(1, now.size())), field.carpet_length, field.carpet_width,
+                    height);
 }
 
 }  // namespace ubersim::kernel

@@ -74,6 +74,8 @@ const char* LeagueRealismPresetNames();
 /// `count` cameras over a carpet of length × width (m): a grid, two rows once there are four or
 /// more, each camera above the centre of its cell at `height`.
 std::vector<CameraModel> CameraGrid(int count, double length, double width, double height);
+/// The cameras `now` laid out anew over another field's carpet: as many (at least one), as high.
+std::vector<CameraModel> CamerasOver(const std::vector<CameraModel>& now, const FieldGeometry& field);
 
 /// Samples the ground truth as the cameras see it: at each camera's frame rate, with noise,
 /// drop-outs and an airborne ball projected onto the carpet, and holds each frame for the
