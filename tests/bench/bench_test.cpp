@@ -9,7 +9,8 @@
 
 #include "bare_ode_mirror.hpp"
 #include "bench.hpp"
-#include "ubersim/kernel/scene_graph.hpp"
+#include "physics/scene_graph.hpp"
+#include "world/world_attorney.hpp"
 
 namespace ubersim::kernel::bench {
 namespace {
@@ -33,7 +34,7 @@ TEST_F(BenchWorld, TheBaselineCopiesEveryBodyAndJointAndItsRobotsStandOnTheirWhe
   int bodies = 0;
   std::vector<std::pair<int, double>> chassis;  // body index, start height
   std::map<int, Eigen::Vector2d> start_xy;
-  world->scene().Root().ForEachBody([&](BodyImpl& b) {
+  WorldAttorney::Scene(*world).Root().ForEachBody([&](BodyImpl& b) {
     if (b.Name() == "chassis") {
       chassis.emplace_back(bodies, b.GetPose().position.z());
       start_xy[bodies] = b.GetPose().position.head<2>();
@@ -46,7 +47,7 @@ TEST_F(BenchWorld, TheBaselineCopiesEveryBodyAndJointAndItsRobotsStandOnTheirWhe
     joints += static_cast<int>(n.joints().size());
     for (const auto& c : n.children()) count(*c);
   };
-  count(world->scene().Root());
+  count(WorldAttorney::Scene(*world).Root());
   BareOdeMirror mirror(*world, 3);
   EXPECT_EQ(mirror.bodies(), bodies);
   EXPECT_EQ(mirror.joints(), joints);
@@ -69,7 +70,7 @@ TEST_F(BenchWorld, TheBaselineCopiesEveryBodyAndJointAndItsRobotsStandOnTheirWhe
     Vec3 kernel_position = Vec3::Zero();
     // A copy: a lambda may capture a structured binding only from C++20 on, which clang 14 lacks.
     const auto body = index;
-    world->scene().Root().ForEachBody([&](BodyImpl& b) {
+    WorldAttorney::Scene(*world).Root().ForEachBody([&](BodyImpl& b) {
       if (k++ == body) kernel_position = b.GetPose().position;
     });
     apart += (mirror.BodyPosition(index) - kernel_position).head<2>().norm() / 12.0;
@@ -104,7 +105,7 @@ TEST_F(BenchWorld, TheBaselineStepsTheSameInStretchesAsInLockstepAndItsOneBodyRo
   stretches.StepRecorded();
   EXPECT_EQ(stretches.recorded(), 0u);
   int index = 0, robots = 0;
-  world.scene().Root().ForEachBody([&](BodyImpl& b) {
+  WorldAttorney::Scene(world).Root().ForEachBody([&](BodyImpl& b) {
     const Vec3 kernel = b.GetPose().position;
     EXPECT_EQ(stretches.BodyPosition(index), lockstep.BodyPosition(index)) << b.Name() << " " << index;
     if (b.Name() == "chassis") {
@@ -120,13 +121,13 @@ TEST_F(BenchWorld, TheBaselineStepsTheSameInStretchesAsInLockstepAndItsOneBodyRo
 
 TEST_F(BenchWorld, RandomPlayDrivesEveryRobotAndKeepsTheBallMoving) {
   auto world = Make("div-b");
-  const WorldSnapshot start = world->Snapshot();
+  const WorldSnapshot start = world->GroundTruth();
   RandomPlay play(*world, 7);
   for (int i = 0; i < 3000; ++i) {
     play.BeforeStep();
     world->Step();
   }
-  const WorldSnapshot end = world->Snapshot();
+  const WorldSnapshot end = world->GroundTruth();
   for (std::size_t i = 0; i < end.robots.size(); ++i) {
     const double moved = (end.robots[i].pose.position - start.robots[i].pose.position).norm();
     EXPECT_GT(moved, 0.3) << "robot " << i;
@@ -152,7 +153,7 @@ TEST_F(BenchWorld, RandomPlayPutsABallThatLeftTheFieldClearOfTheRobots) {
     if (!play.BeforeStep()) continue;
     world->ProcessEvents();
     ++placed;
-    const WorldSnapshot s = world->Snapshot();
+    const WorldSnapshot s = world->GroundTruth();
     ASSERT_LT(std::abs(s.ball.pose.position.x()), 10.0) << "seed " << seed << ": not put back";
     for (const RobotState& r : s.robots) {
       EXPECT_GE((r.pose.position - s.ball.pose.position).head<2>().norm(), r.radius + ball_radius)

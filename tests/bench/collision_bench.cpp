@@ -8,8 +8,8 @@
 
 #include "../common/random_scene.hpp"
 #include "../common/ssl_scene.hpp"
-#include "ubersim/kernel/collision.hpp"
-#include "ubersim/kernel/ode_handles.hpp"
+#include "collision/collision.hpp"
+#include "physics/ode_handles.hpp"
 
 namespace ubersim::kernel {
 namespace {

@@ -126,7 +126,7 @@ BENCHMARK(BM_VisionDetectionPacket);
 void BM_ViewerStateMessage(benchmark::State& state) {
   PlayedWorld w("div-a");
   viewer::WorldSample sample;
-  viewer::SampleSnapshot(w.world->Snapshot(), sample);
+  viewer::SampleSnapshot(w.world->GroundTruth(), sample);
   const std::vector<VisionFrame> frames{DivAFrame()};
   std::string json;
   for (auto _ : state) {

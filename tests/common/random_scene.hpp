@@ -7,7 +7,7 @@
 
 #include <ode/ode.h>
 
-#include "ubersim/kernel/scene_graph.hpp"
+#include "physics/scene_graph.hpp"
 
 // Random scenes of spheres, boxes and cylinders in nested nodes, some static, some on bodies
 // (several geometries per body, several bodies per node), shared by the collision tests and the

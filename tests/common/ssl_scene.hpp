@@ -5,8 +5,8 @@
 #include <random>
 #include <string>
 
-#include "ubersim/kernel/field_builder.hpp"
-#include "ubersim/kernel/scene_graph.hpp"
+#include "physics/field_builder.hpp"
+#include "physics/scene_graph.hpp"
 #include "test_world.hpp"
 
 // An SSL-shaped scene for the collision benchmark: the Div B field, the ball, and robots with a

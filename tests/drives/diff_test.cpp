@@ -16,7 +16,8 @@
 
 #include "../common/edited_model_file.hpp"
 #include "diff_world.hpp"
-#include "ubersim/kernel/scene_graph.hpp"
+#include "physics/scene_graph.hpp"
+#include "world/world_attorney.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -31,7 +32,7 @@ double Tilt(const RobotState& r) {
 }
 
 Joint& Axle(DiffWorld& w, const char* wheel) {
-  return *w.world->scene().Root().FindChild("blue")->FindChild("0")->FindChild(wheel)->FindJoint("axle");
+  return *WorldAttorney::Scene(*w.world).Root().FindChild("blue")->FindChild("0")->FindChild(wheel)->FindJoint("axle");
 }
 
 int Count(const std::string& text, const std::string& what) {
@@ -234,7 +235,7 @@ TEST(DiffDrive, TheRotorAddsInertiaAboutTheAxleOnly) {
   std::filesystem::remove(file);
   const double r = kWheelRadius, width = 0.012, mass = 0.05;  // models/robots/cmdragons-2003-diff.yaml
   int wheels = 0;
-  w.world->scene().Root().ForEachBody([&](BodyImpl& b) {
+  WorldAttorney::Scene(*w.world).Root().ForEachBody([&](BodyImpl& b) {
     if (b.Name() != "wheel") return;
     ++wheels;
     dMass m;

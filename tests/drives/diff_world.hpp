@@ -35,7 +35,7 @@ struct DiffWorld {
     model.ball_start = Vec3(3.5, 2.5, 0);  // out of the way
     world = std::make_unique<World>(model, registry, log, false);
   }
-  RobotState Robot() const { return world->Snapshot().robots.at(0); }
+  RobotState Robot() const { return world->GroundTruth().robots.at(0); }
   // Sends the command every 10 ms (a 100 Hz radio) for `seconds`.
   void Drive(const MoveCommand& c, double seconds) {
     const int steps = static_cast<int>(std::lround(seconds / world->model().physics.step));

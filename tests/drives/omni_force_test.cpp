@@ -17,6 +17,7 @@
 #include <ubersim/servo.hpp>
 
 #include "omni_world.hpp"
+#include "world/world_attorney.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -66,7 +67,7 @@ struct ForceWorld {
     if (edit) edit(model);
     world = std::make_unique<World>(model, registry, log, false);
   }
-  RobotState Robot() const { return world->Snapshot().robots.at(0); }
+  RobotState Robot() const { return world->GroundTruth().robots.at(0); }
   void Step(int n = 1) {
     for (int i = 0; i < n; ++i) world->Step();
   }
@@ -133,7 +134,7 @@ double Slope(const std::vector<double>& t, const std::vector<double>& v, double 
 
 TEST(OmniForceDrive, IsOneBodyStandingAsHighAsOnWheels) {
   ForceWorld w;
-  NodeImpl* robot = w.world->scene().Find("blue/0");
+  NodeImpl* robot = WorldAttorney::Scene(*w.world).Find("blue/0");
   EXPECT_EQ(robot->FindChild("wheel0"), nullptr);  // no wheel bodies…
   EXPECT_EQ(robot->FindGeom("wheel0"), nullptr);   // …and nothing of the wheels touches the carpet
   w.Step(20);
@@ -152,7 +153,7 @@ TEST(OmniForceDrive, IsOneBodyStandingAsHighAsOnWheels) {
 TEST(OmniForceDrive, FallsWhenLiftedAndLandsLevelWhereItRests) {
   ForceWorld w;
   w.Step(20);
-  Body& chassis = *w.world->scene().Find("blue/0")->FindBody("chassis");
+  Body& chassis = *WorldAttorney::Scene(*w.world).Find("blue/0")->FindBody("chassis");
   // 5 cm up and tilted 0.05 rad about x (not enough for the shell to touch first): its wheels
   // are off the carpet, nothing holds it.
   chassis.SetPose(Pose{Vec3(-2.0, 0.0, kRestHeight + 0.05), Quat(Eigen::AngleAxisd(0.05, Vec3::UnitX()))});
@@ -356,8 +357,8 @@ TEST(OmniForceDrive, WheelsFarOutStillTurnSteadily) {
 class ProbeContext final : public RobotContext {
  public:
   ProbeContext(ForceWorld& w, const ParamView& params)
-      : node_(w.world->scene().Root().AddChild("probe")),
-        chassis_(*w.world->scene().Find("blue/0")->FindBody("chassis")),
+      : node_(WorldAttorney::Scene(*w.world).Root().AddChild("probe")),
+        chassis_(*WorldAttorney::Scene(*w.world).Find("blue/0")->FindBody("chassis")),
         body_(w.model.robots.at(0).model->body),
         params_(params),
         log_(w.log) {}

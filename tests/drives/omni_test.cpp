@@ -10,8 +10,9 @@
 #include <ode/ode.h>
 
 #include "omni_world.hpp"
-#include "ubersim/kernel/scene_graph.hpp"
+#include "physics/scene_graph.hpp"
 #include "ubersim/wheel.hpp"
+#include "world/world_attorney.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -110,7 +111,7 @@ TEST(OmniDrive, WheelSpeedCommandMustMatchTheWheelCount) {
 // wheel's inertia about its axle, and nothing to its mass (the motor rides on the chassis).
 TEST(OmniDrive, TheRotorAddsInertiaAboutTheAxleOnly) {
   OmniWorld w;
-  Body* wheel = w.world->scene().Find("blue/0/wheel0")->FindBody("wheel");
+  Body* wheel = WorldAttorney::Scene(*w.world).Find("blue/0/wheel0")->FindBody("wheel");
   ASSERT_NE(wheel, nullptr);
   dMass m;
   dBodyGetMass(static_cast<BodyImpl*>(wheel)->id(), &m);
@@ -129,7 +130,7 @@ TEST(OmniDrive, TheRotorAddsInertiaAboutTheAxleOnly) {
 TEST(OmniDrive, TheShellShieldsTheWheelsFromAllButTheCarpet) {
   OmniWorld w;
   for (int i = 0; i < 4; ++i) {
-    const NodeImpl* wheel = w.world->scene().Find("blue/0/wheel" + std::to_string(i));
+    const NodeImpl* wheel = WorldAttorney::Scene(*w.world).Find("blue/0/wheel" + std::to_string(i));
     ASSERT_NE(wheel, nullptr);
     EXPECT_EQ(wheel->FindGeom("tyre"), nullptr) << "wheel " << i;
     EXPECT_NE(wheel->FindGeom("carpet_contact"), nullptr) << "wheel " << i;

@@ -33,7 +33,7 @@ struct OmniWorld {
     model.radio = RadioModel{};  // the drive is tested, not the radio: no delay, no loss
     world = std::make_unique<World>(model, registry, log, false);
   }
-  RobotState Robot() const { return world->Snapshot().robots.at(0); }
+  RobotState Robot() const { return world->GroundTruth().robots.at(0); }
   // Sends the command every 10 ms (a 100 Hz radio) for `seconds`.
   void Drive(const MoveCommand& c, double seconds) {
     const int steps = static_cast<int>(std::lround(seconds / 0.001));

@@ -8,7 +8,8 @@
 #include <gtest/gtest.h>
 
 #include "omni_world.hpp"
-#include "ubersim/kernel/urdf.hpp"
+#include "model/urdf.hpp"
+#include "world/world_attorney.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -68,10 +69,10 @@ TEST(Urdf, TheMeshShellCollidesWithTheBall) {
   double min_x = 0;
   for (int i = 0; i < 600; ++i) {
     w.world->Step();
-    min_x = std::min(min_x, w.world->ball().GetPose().position.x());
+    min_x = std::min(min_x, WorldAttorney::Ball(*w.world).GetPose().position.x());
   }
   EXPECT_GT(min_x, -2.0 + 0.07 + 0.0215 - 0.003) << "the ball went into the shell";
-  EXPECT_GT(w.world->ball().GetTwist().linear.x(), 0.1) << "the ball should bounce back";
+  EXPECT_GT(WorldAttorney::Ball(*w.world).GetTwist().linear.x(), 0.1) << "the ball should bounce back";
 }
 
 fs::path WriteTemp(const std::string& name, const std::string& text) {

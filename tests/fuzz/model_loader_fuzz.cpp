@@ -11,7 +11,6 @@
 
 #include "fuzz_checks.hpp"
 #include "ubersim/kernel/model.hpp"
-#include "ubersim/kernel/model_error.hpp"
 #include "ubersim/kernel/plugin_registry.hpp"
 
 namespace {

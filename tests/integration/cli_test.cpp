@@ -26,7 +26,7 @@ fs::path TempDir() {
 }
 
 const std::string kModels = UBERSIM_SOURCE_DIR "/models";
-const std::string kFakePlugins = UBERSIM_BINARY_DIR "/tests/plugins/fakes";
+const std::string kFakePlugins = UBERSIM_BINARY_DIR "/tests/unit/registry/fakes";
 
 TEST(Cli, HelpAndUsageErrors) {
   const Result help = RunUbersim("--help");

@@ -10,6 +10,7 @@
 
 #include "../common/edited_model_file.hpp"
 #include "parts_world.hpp"
+#include "world/world_attorney.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -167,7 +168,7 @@ TEST(RollerDribblerHinge, SpeedIsClampedToTheMaximum) {
   PartsWorld w(HingeBarRobot());
   w.Run(0.2);
   w.Run(0.5, std::nullopt, std::nullopt, 1e4);
-  const NodeImpl* node = w.world->scene().Find("blue/0/dribbler");
+  const NodeImpl* node = WorldAttorney::Scene(*w.world).Find("blue/0/dribbler");
   ASSERT_NE(node, nullptr);
   const Joint* axle = node->FindJoint("axle");
   ASSERT_NE(axle, nullptr);
@@ -188,7 +189,7 @@ TEST(RollerDribblerSurface, SpeedIsClampedToo) {
   EXPECT_GT(at_max, 20.0);
   EXPECT_NEAR(spin(1e4), at_max, 0.01 * at_max);
   EXPECT_LT(spin(0.5 * kDribble), 0.75 * at_max);
-  EXPECT_EQ(PartsWorld().world->scene().Find("blue/0/dribbler")->FindJoint("axle"), nullptr) << "no hinge";
+  EXPECT_EQ(WorldAttorney::Scene(*PartsWorld().world).Find("blue/0/dribbler")->FindJoint("axle"), nullptr) << "no hinge";
 }
 
 TEST(RollerDribblerModels, The2003RobotAndTheUrdfTwinHoldTheBallToo) {

@@ -10,6 +10,7 @@
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/model.hpp"
 #include "ubersim/kernel/world.hpp"
+#include "world/world_attorney.hpp"
 
 // One robot with its dribbler and kicker alone on the Div B field at (-2, 0) facing +x, the ball
 // anywhere, commands sent at 100 Hz as a team's radio does.
@@ -40,9 +41,9 @@ struct PartsWorld {
     world = std::make_unique<World>(model, registry, log, false);
   }
 
-  RobotState Robot() const { return world->Snapshot().robots.at(0); }
-  Pose BallPose() { return world->ball().GetPose(); }
-  Twist BallTwist() { return world->ball().GetTwist(); }
+  RobotState Robot() const { return world->GroundTruth().robots.at(0); }
+  Pose BallPose() { return WorldAttorney::Ball(*world).GetPose(); }
+  Twist BallTwist() { return WorldAttorney::Ball(*world).GetTwist(); }
   double BallRadius() const { return world->model().ball->radius; }
   double Front() const { return robot_model->body.front_distance; }
 

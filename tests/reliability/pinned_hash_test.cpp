@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "../common/shipped_worlds.hpp"
-#include "bench.hpp"
+#include "shared/random_play.hpp"
 #include "ubersim/kernel/snapshot.hpp"
 #include "ubersim/kernel/world.hpp"
 
@@ -46,7 +46,7 @@ TEST_P(PinnedHash, ShippedWorldsStepToTheRecordedStates) {
   testing::ShippedWorlds s;
   const WorldModel model = s.Load(pinned.world);
   World world(model, s.registry, s.log, false);
-  bench::RandomPlay play(world, 7);
+  apps::RandomPlay play(world, 7);
   for (int i = 0; i < 2000; ++i) {
     play.BeforeStep();
     world.Step();

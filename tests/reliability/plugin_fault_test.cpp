@@ -13,9 +13,10 @@
 #include "../common/test_world.hpp"
 #include "ubersim/error.hpp"
 #include "ubersim/kernel/logging.hpp"
-#include "ubersim/kernel/ode_state.hpp"
+#include "state/ode_state.hpp"
 #include "ubersim/kernel/snapshot.hpp"
 #include "ubersim/kernel/world.hpp"
+#include "world/world_attorney.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -64,7 +65,7 @@ void DriveBoth(World& world) {
 
 bool AllFinite(const World& world) {
   SavedState s;
-  CaptureOdeState(const_cast<World&>(world).scene(), s);
+  CaptureOdeState(WorldAttorney::Scene(const_cast<World&>(world)), s);
   for (const SavedBody& b : s.bodies) {
     for (double v : b.position) if (!std::isfinite(v)) return false;
     for (double v : b.linear_velocity) if (!std::isfinite(v)) return false;
@@ -75,12 +76,12 @@ bool AllFinite(const World& world) {
 }
 
 double WheelMotorSpeed(World& world, int id) {
-  const NodeImpl* wheel = world.scene().Find("blue/" + std::to_string(id) + "/wheel");
+  const NodeImpl* wheel = WorldAttorney::Scene(world).Find("blue/" + std::to_string(id) + "/wheel");
   return dJointGetHingeParam(wheel->joints().front()->id(), dParamVel);
 }
 
 double SpeedOf(World& world, int id) {
-  for (const RobotState& r : world.Snapshot().robots) {
+  for (const RobotState& r : world.GroundTruth().robots) {
     if (r.id.id == id) return r.twist.linear.norm();
   }
   return -1;
@@ -217,7 +218,7 @@ TEST(PluginFault, ANanForceIsCaughtBeforeThePhysicsStepAndRepaired) {
     World world(TwoRobots("nan_force", policy, 200), f.registry, f.log, false);
     Drive(world, 1);
     for (int i = 0; i < 200; ++i) world.Step();
-    const Pose before = world.Snapshot().robots[0].pose;
+    const Pose before = world.GroundTruth().robots[0].pose;
     for (int i = 0; i < 300; ++i) world.Step();
     ASSERT_EQ(world.faults().size(), 1u) << policy;
     ExpectNamed(world.faults()[0], "PreStep");
@@ -225,7 +226,7 @@ TEST(PluginFault, ANanForceIsCaughtBeforeThePhysicsStepAndRepaired) {
     EXPECT_EQ(world.faults()[0].step, 200);
     // Nothing went non-finite, the robot did not jump, and the sound robot drove on.
     EXPECT_TRUE(AllFinite(world)) << policy;
-    const Pose after = world.Snapshot().robots[0].pose;
+    const Pose after = world.GroundTruth().robots[0].pose;
     EXPECT_LT((after.position - before.position).norm(), 0.01) << policy;
     if (std::string(policy) == "stop") {
       EXPECT_EQ(world.clock().steps(), 201);
@@ -258,12 +259,12 @@ TEST(PluginFault, NonFiniteStateNoPluginLeftIsRepairedAndARepeatTakesTheRobotOff
   World world(TwoRobots("none", "disable"), f.registry, f.log, false);
   DriveBoth(world);
   for (int i = 0; i < 100; ++i) world.Step();
-  const dBodyID chassis = world.scene().Find("blue/0")->FindBody("chassis") ? static_cast<BodyImpl*>(
-                              world.scene().Find("blue/0")->FindBody("chassis"))->id()
+  const dBodyID chassis = WorldAttorney::Scene(world).Find("blue/0")->FindBody("chassis") ? static_cast<BodyImpl*>(
+                              WorldAttorney::Scene(world).Find("blue/0")->FindBody("chassis"))->id()
                                                                           : nullptr;
-  const Pose before = world.Snapshot().robots[0].pose;
+  const Pose before = world.GroundTruth().robots[0].pose;
   dBodySetLinearVel(chassis, std::numeric_limits<double>::infinity(), 0, 0);
-  dBodySetLinearVel(world.ball().id(), 0, std::numeric_limits<double>::quiet_NaN(), 0);
+  dBodySetLinearVel(WorldAttorney::Ball(world).id(), 0, std::numeric_limits<double>::quiet_NaN(), 0);
   world.Step();
   // Named by the kernel's state checks (state_check.hpp): the ball, then the robot.
   ASSERT_EQ(world.faults().size(), 2u);
@@ -279,15 +280,15 @@ TEST(PluginFault, NonFiniteStateNoPluginLeftIsRepairedAndARepeatTakesTheRobotOff
   EXPECT_NE(robot.what.find("velocity (inf, 0, 0) m/s"), std::string::npos) << robot.what;
   EXPECT_NE(robot.what.find("(no plugin call left a non-finite value)"), std::string::npos) << robot.what;
   EXPECT_TRUE(AllFinite(world));
-  EXPECT_LT((world.Snapshot().robots[0].pose.position - before.position).norm(), 0.01);  // back, one step on
-  EXPECT_TRUE(world.Snapshot().robots[0].present);
+  EXPECT_LT((world.GroundTruth().robots[0].pose.position - before.position).norm(), 0.01);  // back, one step on
+  EXPECT_TRUE(world.GroundTruth().robots[0].present);
   for (int i = 0; i < 10; ++i) world.Step();
   dBodySetLinearVel(chassis, std::numeric_limits<double>::infinity(), 0, 0);
   world.Step();
-  EXPECT_TRUE(world.Snapshot().robots[0].present);  // not two steps running
+  EXPECT_TRUE(world.GroundTruth().robots[0].present);  // not two steps running
   dBodySetLinearVel(chassis, std::numeric_limits<double>::infinity(), 0, 0);
   world.Step();
-  EXPECT_FALSE(world.Snapshot().robots[0].present);
+  EXPECT_FALSE(world.GroundTruth().robots[0].present);
   EXPECT_NE(f.text.str().find("robot blue 0: went non-finite in two steps running: taken off the field"),
             std::string::npos);
   for (int i = 0; i < 100; ++i) world.Step();

@@ -98,7 +98,7 @@ TEST(Roster, ARobotComesOnGoesOffAndComesBack) {
   EventAnswer a = Ask(world, Place(Team::kBlue, 7, true, Vec3(1.0, 1.5, 0)));
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
   EXPECT_EQ(world.robot_count(), 5u);
-  const WorldSnapshot came_on = world.Snapshot();
+  const WorldSnapshot came_on = world.GroundTruth();
   const RobotState* r = Find(came_on, Team::kBlue, 7);
   ASSERT_NE(r, nullptr);
   EXPECT_TRUE(r->present);
@@ -107,23 +107,23 @@ TEST(Roster, ARobotComesOnGoesOffAndComesBack) {
   EXPECT_TRUE(Contains(Seen(world, 100), seven));
 
   // It drives like the others: its plugins took the command.
-  const double x0 = Find(world.Snapshot(), Team::kBlue, 7)->pose.position.x();
+  const double x0 = Find(world.GroundTruth(), Team::kBlue, 7)->pose.position.x();
   Drive(world, {Forward(Team::kBlue, 7, 1.0)}, 1000);
-  EXPECT_GT(Find(world.Snapshot(), Team::kBlue, 7)->pose.position.x(), x0 + 0.5);
+  EXPECT_GT(Find(world.GroundTruth(), Team::kBlue, 7)->pose.position.x(), x0 + 0.5);
 
   a = Ask(world, Place(Team::kBlue, 7, false));
   EXPECT_TRUE(a.errors.empty());
-  EXPECT_FALSE(Find(world.Snapshot(), Team::kBlue, 7)->present);
+  EXPECT_FALSE(Find(world.GroundTruth(), Team::kBlue, 7)->present);
   EXPECT_FALSE(Contains(Seen(world, 100), seven));
   // Off the field, a teleport without present is a quiet no-op.
-  const Vec3 parked = Find(world.Snapshot(), Team::kBlue, 7)->pose.position;
+  const Vec3 parked = Find(world.GroundTruth(), Team::kBlue, 7)->pose.position;
   Ask(world, Place(Team::kBlue, 7, std::nullopt, Vec3(-2, -2, 0)));
-  EXPECT_EQ(Find(world.Snapshot(), Team::kBlue, 7)->pose.position, parked);
+  EXPECT_EQ(Find(world.GroundTruth(), Team::kBlue, 7)->pose.position, parked);
 
   a = Ask(world, Place(Team::kBlue, 7, true, Vec3(-1.0, 0.5, 0)));
   EXPECT_TRUE(a.errors.empty());
-  EXPECT_TRUE(Find(world.Snapshot(), Team::kBlue, 7)->present);
-  EXPECT_NEAR(Find(world.Snapshot(), Team::kBlue, 7)->pose.position.x(), -1.0, 0.02);
+  EXPECT_TRUE(Find(world.GroundTruth(), Team::kBlue, 7)->present);
+  EXPECT_NEAR(Find(world.GroundTruth(), Team::kBlue, 7)->pose.position.x(), -1.0, 0.02);
   EXPECT_TRUE(Contains(Seen(world, 100), seven));
   EXPECT_EQ(world.robot_count(), 5u);  // the same robot, not a second one
 }
@@ -150,11 +150,11 @@ TEST(Roster, RobotSpecsRebuildTheRobotFromItsModelWithTheirValues) {
   e.spec.max_speed = 1.0;
   e.spec.max_flat_kick_speed = 5.0;
   e.spec.wheel_angles = std::vector<double>{1.0, 2.4, 3.9, 5.3};
-  const Vec3 before = Find(world.Snapshot(), Team::kYellow, 1)->pose.position;
+  const Vec3 before = Find(world.GroundTruth(), Team::kYellow, 1)->pose.position;
   const EventAnswer a = Ask(world, e);
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
   EXPECT_TRUE(a.unapplied.empty()) << a.unapplied.front();
-  const WorldSnapshot rebuilt = world.Snapshot();
+  const WorldSnapshot rebuilt = world.GroundTruth();
   const RobotState* r = Find(rebuilt, Team::kYellow, 1);
   ASSERT_NE(r, nullptr);
   EXPECT_DOUBLE_EQ(r->radius, 0.085);
@@ -166,7 +166,7 @@ TEST(Roster, RobotSpecsRebuildTheRobotFromItsModelWithTheirValues) {
   EXPECT_EQ(world.StateHash(), before_repeat);
   // Its drive now tops out at 1 m/s however hard it is pushed; another robot does not.
   Drive(world, {Forward(Team::kYellow, 0, 3.0), Forward(Team::kYellow, 1, 3.0)}, 1500);
-  const WorldSnapshot now = world.Snapshot();
+  const WorldSnapshot now = world.GroundTruth();
   EXPECT_LT(Find(now, Team::kYellow, 1)->twist.linear.head<2>().norm(), 1.05);
   EXPECT_GT(Find(now, Team::kYellow, 0)->twist.linear.head<2>().norm(), 2.0);
 }
@@ -187,7 +187,7 @@ TEST(Roster, ImpossibleSpecValuesAreRefusedOneByOneAndChangeNothing) {
   EXPECT_NE(a.errors[1].find("max_speed 500 m/s"), std::string::npos) << a.errors[1];
   EXPECT_NE(a.errors[1].find("drive.limits.max_speed"), std::string::npos) << a.errors[1];
   EXPECT_EQ(world.StateHash(), before);
-  EXPECT_DOUBLE_EQ(Find(world.Snapshot(), Team::kBlue, 0)->radius, 0.09);
+  EXPECT_DOUBLE_EQ(Find(world.GroundTruth(), Team::kBlue, 0)->radius, 0.09);
 
   // A value no part of the model takes is named, the rest applies.
   RobotSpecEvent wheels;
@@ -202,7 +202,7 @@ TEST(Roster, ImpossibleSpecValuesAreRefusedOneByOneAndChangeNothing) {
 std::unique_ptr<World> SaveRestoreAndCompare(testing::ShippedWorlds& s, const WorldModel& model, World& world,
                                              const std::string& what) {
   std::vector<CommandEvent> all;
-  for (const RobotState& r : world.Snapshot().robots) {
+  for (const RobotState& r : world.GroundTruth().robots) {
     CommandEvent c;
     c.robot = r.id;
     c.move = LocalVelocityCommand{1.5, 0.3 * r.id.id, 1.0};
@@ -235,11 +235,11 @@ TEST(Roster, SnapshotsKeepRobotsThatCameOnAndSpecsAndContinueBitForBit) {
   const std::unique_ptr<World> restored_world = SaveRestoreAndCompare(s, model, world, "all at once");
   World& restored = *restored_world;
   EXPECT_EQ(restored.robot_count(), 5u);
-  EXPECT_DOUBLE_EQ(Find(restored.Snapshot(), Team::kBlue, 1)->radius, 0.088);
+  EXPECT_DOUBLE_EQ(Find(restored.GroundTruth(), Team::kBlue, 1)->radius, 0.088);
   // The spec announced for a robot not yet on the field came along too.
   Ask(restored, Place(Team::kBlue, 9, true, Vec3(0, 2, 0)));
   Drive(restored, {Forward(Team::kBlue, 9, 3.0)}, 1500);
-  EXPECT_LT(Find(restored.Snapshot(), Team::kBlue, 9)->twist.linear.head<2>().norm(), 2.05);
+  EXPECT_LT(Find(restored.GroundTruth(), Team::kBlue, 9)->twist.linear.head<2>().norm(), 2.05);
 }
 
 // Each kind of change alone, then save, restore and step on: bit for bit. A robot that comes on
@@ -279,10 +279,10 @@ TEST(Roster, TheFieldChangesToAKnownLeagueSizeKeepingRobotsAndBall) {
   testing::ShippedWorlds s;
   const WorldModel model = Small(s);
   World world(model, s.registry, s.log, false);
-  const Vec3 blue0 = Find(world.Snapshot(), Team::kBlue, 0)->pose.position;
+  const Vec3 blue0 = Find(world.GroundTruth(), Team::kBlue, 0)->pose.position;
   EventAnswer a = Ask(world, DivASize());
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
-  WorldSnapshot now = world.Snapshot();
+  WorldSnapshot now = world.GroundTruth();
   EXPECT_EQ(now.field->name, "div-a");
   EXPECT_DOUBLE_EQ(now.field->field_length, 12.0);
   EXPECT_EQ(world.robot_count(), 4u);
@@ -293,7 +293,7 @@ TEST(Roster, TheFieldChangesToAKnownLeagueSizeKeepingRobotsAndBall) {
   double furthest = 0;
   for (int i = 0; i < 800; ++i) {
     world.Step();
-    furthest = std::max(furthest, world.Snapshot().ball.pose.position.x());
+    furthest = std::max(furthest, world.GroundTruth().ball.pose.position.x());
   }
   EXPECT_GT(furthest, 5.0);
   // The cameras see the new field: the robots are reported.
@@ -312,11 +312,11 @@ TEST(Roster, TheFieldChangesToAKnownLeagueSizeKeepingRobotsAndBall) {
   Drive(world, {Forward(Team::kBlue, 0, 1.0)}, 300);
   World restored(model, s.registry, s.log, false);
   restored.Restore(saved);
-  EXPECT_EQ(restored.Snapshot().field->name, "div-a");
+  EXPECT_EQ(restored.GroundTruth().field->name, "div-a");
   Drive(restored, {Forward(Team::kBlue, 0, 1.0)}, 300);
   EXPECT_EQ(restored.StateHash(), world.StateHash());
   world.Reset();
-  EXPECT_EQ(world.Snapshot().field->name, "div-b");
+  EXPECT_EQ(world.GroundTruth().field->name, "div-b");
 }
 
 TEST(Roster, AResetBringsBackTheWorldFilesRobotsWithTheirSpecs) {
@@ -329,8 +329,8 @@ TEST(Roster, AResetBringsBackTheWorldFilesRobotsWithTheirSpecs) {
   Ask(world, e);
   world.Reset();
   EXPECT_EQ(world.robot_count(), 4u);
-  EXPECT_EQ(Find(world.Snapshot(), Team::kYellow, 5), nullptr);
-  EXPECT_DOUBLE_EQ(Find(world.Snapshot(), Team::kBlue, 0)->radius, 0.087);  // a team's robots stay its robots
+  EXPECT_EQ(Find(world.GroundTruth(), Team::kYellow, 5), nullptr);
+  EXPECT_DOUBLE_EQ(Find(world.GroundTruth(), Team::kBlue, 0)->radius, 0.087);  // a team's robots stay its robots
 }
 
 }  // namespace

@@ -31,7 +31,7 @@ using Worlds = testing::ShippedWorlds;
 // robot driven at 100 Hz (varying local velocities), dribblers switched, a kick every half second,
 // the ball put in front of a robot now and then, and one robot taken off the field for a while.
 void Play(World& world, std::int64_t step) {
-  const WorldSnapshot now = world.Snapshot();
+  const WorldSnapshot now = world.GroundTruth();
   const auto n = static_cast<std::int64_t>(now.robots.size());
   const double t = 1e-3 * static_cast<double>(step);
   if (step % 10 == 0) {
@@ -88,7 +88,7 @@ std::uint64_t StepAndDigest(World& world, int count) {
     world.Step();
     const std::uint64_t h = world.StateHash();
     mix(&h, sizeof h);
-    for (const RobotState& r : world.Snapshot().robots) {
+    for (const RobotState& r : world.GroundTruth().robots) {
       const bool flags[] = {r.present, r.dribbler_ball_contact, r.kicker_ready};
       mix(flags, sizeof flags);
     }
@@ -184,7 +184,7 @@ std::uint64_t Scrum(World& world, int count) {
   std::uint64_t digest = 0;
   for (int i = 0; i < count; ++i) {
     const std::int64_t step = world.clock().steps();
-    const WorldSnapshot now = world.Snapshot();
+    const WorldSnapshot now = world.GroundTruth();
     if (step % 10 == 0) {
       for (const RobotState& r : now.robots) {
         const Vec3 to_ball = now.ball.pose.position - r.pose.position;

@@ -9,7 +9,7 @@
 
 #include "soak.hpp"
 #include "teleports.hpp"
-#include "ubersim/kernel/field_builder.hpp"
+#include "ubersim/kernel/field.hpp"
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/model.hpp"
 #include "ubersim/kernel/plugin_registry.hpp"
@@ -69,8 +69,8 @@ TEST_F(DivA, EachTeleportPutsItsObjectWhereItSaysAndNeverWhereContactsCannotPart
       const double speed = posted->velocity->norm();
       EXPECT_LE(speed, posted->target.is_ball ? 6.5 + 1e-9 : 3.0 + 1e-9) << ToString(kind);
       // Never the ball's centre inside a robot: a hull is hollow to the collision code.
-      for (const RobotState& r : world->Snapshot().robots) {
-        EXPECT_GT((r.pose.position - world->Snapshot().ball.pose.position).head<2>().norm(), 0.07 - 1e-9)
+      for (const RobotState& r : world->GroundTruth().robots) {
+        EXPECT_GT((r.pose.position - world->GroundTruth().ball.pose.position).head<2>().norm(), 0.07 - 1e-9)
             << ToString(kind) << ": the ball inside robot " << r.id.id;
       }
       if (DeepestOverlap(*world, who) > 0.0) ++overlapping;
@@ -127,7 +127,7 @@ TEST_F(DivA, ARobotPutIntoAGoalsBackWallFromBehindIsPushedBackOut) {
         world->events().Post(drive);
       }
       world->Step();
-      for (const RobotState& r : world->Snapshot().robots) {
+      for (const RobotState& r : world->GroundTruth().robots) {
         if (r.id.team == id.team && r.id.id == id.id) highest = std::max(highest, r.pose.position.z());
       }
     }
@@ -147,7 +147,7 @@ TEST_F(DivA, RobotsPutOntoOneAnotherPartSidewaysAndStayOnTheCarpet) {
   const RobotId mover{Team::kYellow, 1}, resting{Team::kBlue, 6};
   const Vec3 at(2.0, -2.0, 0.0);
   auto state = [&](const RobotId& id) {
-    for (const RobotState& r : world->Snapshot().robots) {
+    for (const RobotState& r : world->GroundTruth().robots) {
       if (r.id == id) return r;
     }
     return RobotState{};

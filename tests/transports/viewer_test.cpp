@@ -485,7 +485,7 @@ TEST_F(ViewerWorld, APageSeesTheWorldAndItsCommandsReachTheKernel) {
   const rapidjson::Document state =
       StateWhere(page, [](const rapidjson::Document& d) { return d["t"].GetDouble() > 0.05; }, true);
   ASSERT_TRUE(state.IsObject());
-  const WorldSnapshot truth = world->Snapshot();
+  const WorldSnapshot truth = world->GroundTruth();
   ASSERT_EQ(state["robots"].Size(), truth.robots.size());
   for (rapidjson::SizeType i = 0; i < state["robots"].Size(); ++i) {
     const auto& r = state["robots"][i];
@@ -512,15 +512,15 @@ TEST_F(ViewerWorld, APageSeesTheWorldAndItsCommandsReachTheKernel) {
   }, false);
   ASSERT_TRUE(moved.IsObject());
   EXPECT_NEAR(moved["ball"]["y"].GetDouble(), -0.5, 1e-9);
-  EXPECT_EQ(world->ball().GetPose().position.x(), 1.0);
-  EXPECT_EQ(world->ball().GetPose().position.y(), -0.5);
+  EXPECT_EQ(world->GroundTruth().ball.pose.position.x(), 1.0);
+  EXPECT_EQ(world->GroundTruth().ball.pose.position.y(), -0.5);
   EXPECT_EQ(world->clock().steps(), steps) << "nothing stepped";
 
   // A robot dragged and turned.
   page.Send(R"({"cmd":"move","target":{"team":"yellow","id":2},"x":0.5,"y":2.0,"yaw":1.0})");
   page.ReadType("ack");
   world->ProcessEvents();
-  const RobotState yellow2 = world->Snapshot().robots.at(8);
+  const RobotState yellow2 = world->GroundTruth().robots.at(8);
   ASSERT_EQ(yellow2.id, (RobotId{Team::kYellow, 2}));
   EXPECT_NEAR(yellow2.pose.position.x(), 0.5, 1e-9);
   EXPECT_NEAR(yellow2.pose.Yaw(), 1.0, 1e-9);
@@ -538,8 +538,8 @@ TEST_F(ViewerWorld, APageSeesTheWorldAndItsCommandsReachTheKernel) {
   page.Send(R"({"cmd":"kick","vx":2.0,"vy":1.0})");
   page.ReadType("ack");
   world->Step();
-  EXPECT_NEAR(world->ball().GetTwist().linear.x(), 2.0, 0.05);
-  EXPECT_NEAR(world->ball().GetTwist().linear.y(), 1.0, 0.05);
+  EXPECT_NEAR(world->GroundTruth().ball.twist.linear.x(), 2.0, 0.05);
+  EXPECT_NEAR(world->GroundTruth().ball.twist.linear.y(), 1.0, 0.05);
 
   // A malformed command changes nothing and is answered with the reason.
   const auto applied = world->event_counters().applied;

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "ubersim/kernel/model_error.hpp"
+#include "ubersim/kernel/model.hpp"
 
 #include <charconv>
 #include <utility>

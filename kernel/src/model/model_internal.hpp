@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "ubersim/kernel/model_error.hpp"
+#include "ubersim/kernel/model.hpp"
 #include "ubersim/params.hpp"
 
 namespace ubersim::kernel::model_detail {

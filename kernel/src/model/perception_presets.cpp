@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The vision and radio presets and the default camera layout (read by the model loader).
-#include "ubersim/kernel/perception.hpp"
+#include "perception/vision_pipeline.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -6,7 +6,7 @@
 
 #include <rapidjson/document.h>
 
-#include "../fnv1a.hpp"
+#include "util/fnv1a.hpp"
 #include "model_internal.hpp"
 
 namespace ubersim::kernel::model_detail {

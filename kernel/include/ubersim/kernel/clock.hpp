@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
+// Time: the simulated clock (integer nanoseconds), the run controls clock events set (pause,
+// speed, single step, reset), and the pacer that holds a run to the wall clock.
 #pragma once
 
 #include <chrono>

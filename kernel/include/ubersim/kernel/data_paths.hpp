@@ -1,4 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
+// Data paths: where the running program finds its shipped models, schemas and default world.
 #pragma once
 
 #include <filesystem>

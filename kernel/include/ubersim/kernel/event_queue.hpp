@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
+// Events into a world: the thread-safe queue transports and in-process clients post commands,
+// teleports, clock and realism events to; the world drains it at the start of each step.
 #pragma once
 
 #include <chrono>

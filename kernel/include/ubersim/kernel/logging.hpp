@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
+// Logging: the kernel's implementations of the SDK's Log (a stream with a minimum level, and a
+// prefix for each plugin).
 #pragma once
 
 #include <mutex>

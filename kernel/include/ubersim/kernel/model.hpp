@@ -1,4 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
+// Models and their loader: the typed, validated contents of the model files (world, field, ball,
+// robot; models/*/*.yaml), the loader that reads and checks them, and ModelError, which says
+// where a file is wrong (file, line, column, key path) and why. Also the vision and radio models
+// a world file describes, with their presets. SI units throughout.
 #pragma once
 
 #include <array>
@@ -7,20 +11,89 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "ubersim/component.hpp"
 #include "ubersim/events.hpp"
+#include "ubersim/math.hpp"
 #include "ubersim/params.hpp"
-#include "ubersim/plugin.hpp"
+#include "ubersim/plugin_kind.hpp"
 #include "ubersim/scene.hpp"
 #include "ubersim/world_state.hpp"
-#include "ubersim/kernel/model_error.hpp"
-#include "ubersim/kernel/perception.hpp"
 
-// Typed, validated contents of the model files (models/*/*.yaml). SI units throughout.
 namespace ubersim::kernel {
+
+/// An error in a model file, saying where (file, line, column, key path) and why.
+class ModelError : public std::runtime_error {
+ public:
+  /// line/column are 1-based; 0 when unknown (e.g. a missing file). key is the dotted path
+  /// ("drive.wheels[2].angle_deg"), empty for the whole file.
+  ModelError(std::string file, int line, int column, std::string key, std::string reason);
+
+  const std::string& file() const { return file_; }      ///< model file path
+  int line() const { return line_; }                     ///< 1-based line, 0 unknown
+  int column() const { return column_; }                 ///< 1-based column, 0 unknown
+  const std::string& key() const { return key_; }        ///< key path
+  const std::string& reason() const { return reason_; }  ///< what is wrong
+
+ private:
+  std::string file_;
+  int line_;
+  int column_;
+  std::string key_;
+  std::string reason_;
+};
+
+/// One overhead camera: where it hangs and the part of the carpet it is responsible for.
+struct CameraModel {
+  int id = 0;                        ///< camera_id in the packets
+  Vec3 position = Vec3(0, 0, 6);     ///< field frame, m
+  double x_min = 0, y_min = 0;       ///< its part of the carpet (before overlap), m
+  double x_max = 0, y_max = 0;       ///< m
+};
+
+/// The vision system a world simulates (the world file's `perception:` block, presets resolved).
+struct PerceptionModel {
+  std::string preset = "ideal";          ///< ideal, 2003 or realistic: the defaults it started from
+  double frame_rate = 60.0;              ///< frames per second per camera, Hz
+  double latency = 0.0;                  ///< capture to send (t_sent - t_capture), s
+  double ball_position_sigma = 0.0;      ///< Gaussian noise on the ball's x and y, m
+  double robot_position_sigma = 0.0;     ///< on robots' x and y, m
+  double robot_orientation_sigma = 0.0;  ///< on robots' heading, rad
+  double ball_drop = 0.0;                ///< probability a camera frame misses the ball
+  double robot_drop = 0.0;               ///< probability a camera frame misses a robot
+  double camera_overlap = 0.3;           ///< each camera sees this far past its part, m
+  std::vector<CameraModel> cameras;      ///< at least one
+};
+
+/// The radio between the teams' software and the robots (the `radio:` block, presets resolved).
+struct RadioModel {
+  std::string preset = "ideal";  ///< ideal, 2003 or realistic
+  double latency = 0.0;          ///< from arrival to taking effect, s
+  double loss = 0.0;             ///< probability a command is lost
+};
+
+/// Defaults of a preset ("ideal", "2003", "realistic"); false for an unknown name.
+bool PerceptionPreset(const std::string& name, PerceptionModel& model);
+/// Defaults of a radio preset; false for an unknown name.
+bool RadioPreset(const std::string& name, RadioModel& model);
+/// The league's realism presets as the ER-Force simulator names them (None, Friendly, RC2021,
+/// Realistic; any case), put over `vision` and `radio`: noise, drop-outs, overlap, latency,
+/// command delay and loss. Frame rate and cameras stay. What the preset asks for that ÜberSim does
+/// not model goes to `unmodelled`, one entry each. False for an unknown name.
+bool LeagueRealismPreset(const std::string& name, PerceptionModel& vision, RadioModel& radio,
+                         std::vector<std::string>& unmodelled);
+/// The league's preset names, for messages: "None, Friendly, RC2021, Realistic".
+const char* LeagueRealismPresetNames();
+
+/// `count` cameras over a carpet of length × width (m): a grid, two rows once there are four or
+/// more, each camera above the centre of its cell at `height`.
+std::vector<CameraModel> CameraGrid(int count, double length, double width, double height);
+/// The cameras `now` laid out anew over another field's carpet: as many (at least one), as high.
+std::vector<CameraModel> CamerasOver(const std::vector<CameraModel>& now, const FieldGeometry& field);
+
 
 /// Surface pair entry of a world's material table: the surface used when `a` touches `b`.
 struct MaterialPair {

@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
+// The plugin registry: where plugin libraries are searched for, the listing of what was found
+// (accepted plugins and refused files with the reason), and instances created from them.
 #pragma once
 
 #include <filesystem>
@@ -8,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "ubersim/plugin.hpp"
+#include "ubersim/plugin_descriptor.hpp"
 
 namespace ubersim::kernel {
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Snapshots: a world's full state at a step boundary, and the file that keeps it. Restoring one
+// Snapshots (saved-state files): a world's full state at a step boundary, and the file that keeps it. Restoring one
 // into a world built from the same world file and stepping on gives the trajectory the original
 // would have had, bit for bit (docs/reliability.md, "Snapshots").
 #pragma once
@@ -11,11 +11,12 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "ubersim/events.hpp"
 #include "ubersim/kernel/fault.hpp"
-#include "ubersim/kernel/perception.hpp"
+#include "ubersim/kernel/model.hpp"
 
 namespace ubersim::kernel {
 
@@ -24,6 +25,22 @@ namespace ubersim::kernel {
 class SnapshotError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+/// What a perception pipeline carries from one step to the next (saved in snapshots).
+struct PerceptionState {
+  PerceptionModel model;                    ///< as realism events left it (cameras and rate fixed)
+  std::vector<std::int64_t> next_capture_ns;  ///< per camera
+  std::vector<std::uint32_t> frame_numbers;   ///< per camera
+  std::vector<VisionFrame> in_flight;         ///< frames waiting out the latency, oldest first
+  std::string rng;                          ///< the noise generator's state (std::mt19937_64's text form)
+};
+
+/// What a radio link carries from one step to the next (saved in snapshots).
+struct RadioState {
+  RadioModel model;                                          ///< as realism events left it
+  std::vector<std::pair<std::int64_t, CommandEvent>> queue;  ///< commands in flight: due time, command
+  std::string rng;                                           ///< the loss generator's state
 };
 
 /// One ODE body, as ODE keeps it between steps (doubles bit for bit).

@@ -1,32 +1,34 @@
 // SPDX-License-Identifier: Apache-2.0
+// The world: one simulated SSL field with its ball, robots, plugins and transports. It steps,
+// takes events, resets, saves and restores its state, hands out the ground truth and a state hash,
+// keeps the simulated clock, records plugin faults and passes camera frames to an observer.
+//
+// Threading contract: a World is driven from one thread (Step, ProcessEvents, Reset, Save,
+// Restore, GroundTruth and the accessors); only events() may be posted to from other threads.
+// ODE keeps one process-wide random generator that every step reseeds and draws from, so two
+// worlds must not step at the same time in two threads of one process: run worlds in parallel in
+// separate processes (as `ubersim batch` does), or step them one after another in one thread.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "ubersim/events.hpp"
 #include "ubersim/log.hpp"
 #include "ubersim/world_state.hpp"
 #include "ubersim/kernel/clock.hpp"
-#include "ubersim/kernel/collision.hpp"
 #include "ubersim/kernel/event_queue.hpp"
 #include "ubersim/kernel/fault.hpp"
-#include "ubersim/kernel/island_stepper.hpp"
 #include "ubersim/kernel/model.hpp"
-#include "ubersim/kernel/ode_handles.hpp"
-#include "ubersim/kernel/perception.hpp"
 #include "ubersim/kernel/plugin_registry.hpp"
-#include "ubersim/kernel/scene_graph.hpp"
 
 namespace ubersim::kernel {
 
-class Robot;
-class TransportHost;
-struct RobotServices;
+class WorldImpl;
+class WorldAttorney;
 struct SavedState;
 
 /// Where a step's wall time went, accumulated since the start, ns.
@@ -39,28 +41,27 @@ struct StepTimings {
   std::int64_t perception_ns = 0;  ///< camera frames: sampling, noise, latency queue
 };
 
-/// Counters of events the world refused (with a log line each).
+/// Counters of events the world applied or refused (with a log line each).
 struct EventCounters {
   std::int64_t applied = 0;   ///< events applied
   std::int64_t rejected = 0;  ///< unknown robot, non-finite values, …
   std::int64_t lost = 0;      ///< robot commands the simulated radio lost
 };
 
-/// One simulated world: ODE world, scene graph, collision manager, field, ball, robots with
-/// their plugins, transports, events and the clock. Deterministic: the same model, seed and
-/// events give bit-identical states. A plugin fault (fault.hpp) switches the plugin off and puts
-/// back what it broke; under the world file's `on_plugin_fault: stop` the world then stops.
+/// One simulated world. Deterministic: the same model, seed and events give bit-identical
+/// states. A plugin fault (fault.hpp) switches the plugin off and puts back what it broke; under
+/// the world file's `on_plugin_fault: stop` the world then stops.
 class World {
  public:
-  /// Builds everything the model describes, loading plugins through `registry`. Throws
-  /// PluginLoadError or std::runtime_error naming the plugin, robot and reason.
-  /// `start_transports` false builds a world without network (tests, batch).
+  /// Builds everything the model describes, loading plugins through `registry` (which must
+  /// outlive the world). Throws PluginLoadError or std::runtime_error naming the plugin, robot
+  /// and reason. `start_transports` false builds a world without network (tests, batch).
   World(const WorldModel& model, PluginRegistry& registry, Log& log, bool start_transports = true);
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;
 
-  /// One physics step: apply queued events, components' PreStep, collide, QuickStep, PostStep,
+  /// One physics step: apply queued events, components' PreStep, collide, ODE step, PostStep,
   /// answer queries, publish to transports. Does nothing once the world has stopped.
   void Step();
   /// Applies queued events and answers queries without stepping (while paused).
@@ -68,8 +69,8 @@ class World {
   /// Puts everything back where the world file has it; the clock restarts at 0.
   void Reset();
 
-  /// The world's full state now (a step boundary), for a snapshot file. Throws PluginError
-  /// naming the part whose SaveState throws.
+  /// The world's full state now (a step boundary), for a snapshot file (snapshot.hpp). Throws
+  /// PluginError naming the part whose SaveState throws.
   SavedState Save() const;
   /// Rebuilds the world and puts `state` into it: stepping on gives what the saved world would
   /// have given, bit for bit. Throws SnapshotError when the state is of another world (another
@@ -79,142 +80,45 @@ class World {
 
   /// True once a plugin fault under `on_plugin_fault: stop` stopped the world (the step it
   /// happened in was finished without the plugin); Step does nothing from then on.
-  bool stopped() const { return stopped_; }
+  bool stopped() const;
   /// Every plugin fault so far, oldest first.
-  const std::vector<PluginFault>& faults() const { return faults_.faults(); }
+  const std::vector<PluginFault>& faults() const;
   /// The world file's fault policy.
-  FaultPolicy fault_policy() const { return faults_.policy(); }
+  FaultPolicy fault_policy() const;
 
-  /// Where to post events (thread-safe).
-  EventQueue& events() { return events_; }
+  /// Where to post events (thread-safe: the one member other threads may use).
+  EventQueue& events();
   /// Pause, speed, single-step and reset requests from clock events.
-  ClockControl& clock_control() { return clock_control_; }
+  ClockControl& clock_control();
   /// Simulated time and step count.
-  const SimClock& clock() const { return clock_; }
-  /// Ground truth now.
-  WorldSnapshot Snapshot() const;
+  const SimClock& clock() const;
+  /// Ground truth now: every robot and the ball as they are (what transports are handed).
+  WorldSnapshot GroundTruth() const;
   /// A hash of every body's position, orientation and velocities, bit for bit.
   std::uint64_t StateHash() const;
 
-  /// The model the world was built from.
-  const WorldModel& model() const { return model_; }
-  /// The scene graph.
-  SceneGraph& scene() { return *scene_; }
-  /// The scene graph, read-only (state checks).
-  const SceneGraph& scene() const { return *scene_; }
-  /// The collision manager.
-  CollisionManager& collision() { return *collision_; }
-  /// The ball body.
-  BodyImpl& ball() { return *ball_; }
-  /// Number of robots.
-  std::size_t robot_count() const { return robots_.size(); }
-  /// The ODE world.
-  dWorldID ode_world() const { return world_.get(); }
+  /// The model the world was built from (its field: the one in use).
+  const WorldModel& model() const;
+  /// Number of robots in the world.
+  std::size_t robot_count() const;
   /// Accumulated time split.
-  const StepTimings& timings() const { return timings_; }
+  const StepTimings& timings() const;
   /// Event counters.
-  const EventCounters& event_counters() const { return event_counters_; }
+  const EventCounters& event_counters() const;
   /// "plugin: endpoint" of every running transport.
   std::vector<std::string> TransportEndpoints() const;
   /// Also hands every camera frame that leaves the perception pipeline to `observer` (tests,
   /// in-process users), on the simulation thread.
-  void SetVisionObserver(std::function<void(const VisionFrame&)> observer) { vision_observer_ = std::move(observer); }
+  void SetVisionObserver(std::function<void(const VisionFrame&)> observer);
   /// The vision system being simulated.
-  const PerceptionModel& perception() const { return perception_.model(); }
+  const PerceptionModel& perception() const;
 
  private:
-  void Build();
-  // Reset without telling the transports (Reset and Restore).
-  void Rebuild();
-  // Bodies that went non-finite where no plugin call can be blamed (`when`: "after the physics
-  // step", "before the step") are put back to the last good state and reported.
-  void RepairNonFinite(const char* when);
-  // A digest of what decides the trajectory besides the state: bodies, robots, physics.
-  std::uint64_t StructureDigest() const;
-  // Hands the transports the state as it is (at start and after a reset, without a step).
-  void PublishSnapshot();
-  void ApplyEvents(bool stepping);
-  void Apply(const PositionEvent& e);
-  void Apply(const CommandEvent& e);
-  void Deliver(const CommandEvent& e);
-  void Apply(const ClockEvent& e);
-  void Apply(const RealismEvent& e);
-  void Apply(const RobotSpecEvent& e);
-  void Apply(const FieldEvent& e);
-  void Apply(const TransportSettingEvent& e);
-  ObjectState Query(const Target& t) const;
-  Robot* FindRobot(const RobotId& id) const;
-  // Builds a robot under its team's node from its base model with its announced spec, and adds
-  // it to the roster; a robot that fails to build leaves nothing behind (and throws).
-  Robot& AddRobot(const RobotPlacement& placement);
-  // Takes a robot out of the world: its parts, then its bodies; and out of the roster.
-  void RemoveRobot(const RobotId& id);
-  // After robots came or went: the collision manager, the repair records, the body list.
-  void RobotsChanged();
-  // A robot that is not in the world comes on (PositionEvent with present: true); null, with
-  // the reasons in `answer`, when it cannot.
-  Robot* ComeOn(const PositionEvent& e, EventAnswer& answer);
-  // Rebuilds a robot from its (new) model where it is, as it moves; on failure as it was.
-  void RebuildRobot(Robot& robot, EventAnswer& answer);
-  // The model `placement`'s robot is built from: its base with the spec announced for it.
-  std::shared_ptr<const RobotModel> EffectiveModel(const RobotPlacement& placement);
-  // The base model of robot `id`: its roster entry's, else its team's (may be null).
-  std::shared_ptr<const RobotModel> BaseModel(const RobotId& id) const;
-  // The fields a client may switch to: the world's own, its `fields:`, the world file's.
-  std::vector<std::shared_ptr<const FieldModel>> KnownFields() const;
-  // Makes `field` the world's (geometry, cameras) without building it.
-  void UseField(std::shared_ptr<const FieldModel> field);
-  // Builds `field` in place of the current one, keeping robots and ball (moved inside the walls).
-  void ChangeField(std::shared_ptr<const FieldModel> field);
-  // Applies robot specs to models (the kernel's schemas and the registry's plugin schemas).
-  const ModelLoader& Loader();
-
-  WorldModel model_;
-  PluginRegistry& registry_;
-  Log& log_;
-  bool start_transports_;
-  OdeLibrary ode_;
-  // Declaration order is teardown order reversed: transports stop first, robots (and their
-  // plugin libraries' objects) go before the scene, the scene before the collision space, and
-  // everything before the ODE world.
-  OdeWorld world_;
-  std::unique_ptr<SceneGraph> scene_;
-  std::unique_ptr<CollisionManager> collision_;
-  BodyImpl* ball_ = nullptr;
-  IslandStepper islands_;
-  std::vector<dBodyID> body_ids_, ball_ids_;  // the step's bodies for islands_, reused
-  std::vector<char> limbs_;                   // per body of body_ids_: FindLimbs
-  std::uint64_t body_ids_for_ = 0;             // body_ids_ lists this many bodies created
-  std::vector<std::unique_ptr<Robot>> robots_;
-  // What Build builds, in creation order, each with its base model: the world file's robots,
-  // then those that came on while running (a rebuilt robot goes to the end, as its bodies do).
-  std::vector<RobotPlacement> roster_;
-  // Robot specs announced while running, by robot: kept over a reset (they describe a team's
-  // robots), saved in snapshots. spec_models_ caches their models, with the base they were made from.
-  std::map<std::pair<int, int>, RobotSpec> specs_;
-  std::map<std::pair<int, int>, std::pair<std::shared_ptr<const RobotModel>, std::shared_ptr<const RobotModel>>>
-      spec_models_;
-  std::unique_ptr<ModelLoader> loader_;
-  std::uint64_t roster_version_ = 0;
-  std::shared_ptr<const FieldModel> initial_field_;  // the world file's (a reset goes back to it)  // counts robots coming, going and rebuilt
-  NodeImpl* team_nodes_[2] = {nullptr, nullptr};  // blue, yellow
-  std::vector<std::unique_ptr<TransportHost>> transports_;
-  FieldGeometry field_geometry_;
-  EventQueue events_;
-  std::vector<QueryEvent> pending_queries_;
-  ClockControl clock_control_;
-  SimClock clock_;
-  unsigned long ode_random_seed_;
-  std::int64_t sim_time_ns_ = 0;
-  std::unique_ptr<RobotServices> robot_services_holder_;
-  StepTimings timings_;
-  EventCounters event_counters_;
-  PerceptionPipeline perception_;
-  RadioLink radio_;
-  std::function<void(const VisionFrame&)> vision_observer_;
-  FaultMonitor faults_;
-  LastGoodState last_good_;
-  bool stopped_ = false;
+  friend class WorldAttorney;  // the door for the kernel's own tests and the bench (kernel/src/world)
+  std::unique_ptr<WorldImpl> impl_;
 };
+
+/// The physics engine's version and build configuration (ODE's dGetConfiguration), for reports.
+std::string PhysicsEngineConfiguration();
 
 }  // namespace ubersim::kernel

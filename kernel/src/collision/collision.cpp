@@ -1,0 +1,658 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "collision/collision.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <cmath>
+#include <stdexcept>
+
+namespace ubersim::kernel {
+namespace {
+
+bool IsAncestorOrSelf(const NodeImpl* maybe_ancestor, const NodeImpl* node) {
+  for (const NodeImpl* n = node; n; n = n->parent()) {
+    if (n == maybe_ancestor) return true;
+  }
+  return false;
+}
+
+double Mu2(const SurfaceMaterial& m) { return m.mu2 < 0 ? m.mu : m.mu2; }
+
+double GeometricMean(double a, double b) {
+  if (std::isinf(a) && std::isinf(b)) return a;
+  if (std::isinf(a)) return b;  // an infinite-friction surface takes the other's value
+  if (std::isinf(b)) return a;
+  return std::sqrt(std::max(0.0, a) * std::max(0.0, b));
+}
+
+// Combines an optional (negative = unset) parameter, picking with `pick` when both are set.
+template <typename Pick>
+double CombineOptional(double a, double b, Pick pick) {
+  if (a < 0) return b;
+  if (b < 0) return a;
+  return pick(a, b);
+}
+
+bool AabbsOverlap(dGeomID a, dGeomID b) {
+  dReal x[6], y[6];
+  dGeomGetAABB(a, x);
+  dGeomGetAABB(b, y);
+  return x[0] <= y[1] && y[0] <= x[1] && x[2] <= y[3] && y[2] <= x[3] && x[4] <= y[5] &&
+         y[4] <= x[5];
+}
+
+// A plane reaches the narrow phase with every geometry (its box is infinite). A geometry whose
+// box lies wholly on the plane's free side cannot touch it: skip dCollide, which for a trimesh
+// chassis riding over the carpet would test every vertex each step. Exact: ODE makes contacts
+// only where something penetrates the plane.
+bool BoxAbovePlane(dGeomID plane, dGeomID other) {
+  dVector4 p;
+  dGeomPlaneGetParams(plane, p);
+  dReal box[6];
+  dGeomGetAABB(other, box);
+  double lowest = -p[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    const double centre = 0.5 * (box[2 * axis] + box[2 * axis + 1]);
+    const double half = 0.5 * (box[2 * axis + 1] - box[2 * axis]);
+    lowest += p[axis] * centre - std::abs(p[axis]) * half;
+  }
+  return lowest > 0.0;
+}
+
+bool IsSphere(const GeomImpl& g) { return g.GetShape().kind == Shape::Kind::kSphere; }
+
+bool SphereAndPlane(const GeomImpl& a, const GeomImpl& b) {
+  return (IsSphere(a) && b.is_plane()) || (a.is_plane() && IsSphere(b));
+}
+
+bool AbovePlane(const GeomImpl& a, const GeomImpl& b) {
+  if (a.is_plane()) return BoxAbovePlane(a.id(), b.id());
+  if (b.is_plane()) return BoxAbovePlane(b.id(), a.id());
+  return false;
+}
+
+struct SpaceCallbackData {
+  const std::function<void(GeomImpl&, GeomImpl&)>* f;
+};
+
+void SpaceNearCallback(void* data, dGeomID o1, dGeomID o2) {
+  if (dGeomIsSpace(o1) || dGeomIsSpace(o2)) {
+    // A robot's space: a whole robot riding over the carpet ends here; else pair up its parts.
+    if (dGeomGetClass(o1) == dPlaneClass && BoxAbovePlane(o1, o2)) return;
+    if (dGeomGetClass(o2) == dPlaneClass && BoxAbovePlane(o2, o1)) return;
+    dSpaceCollide2(o1, o2, data, &SpaceNearCallback);
+    return;
+  }
+  auto* a = static_cast<GeomImpl*>(dGeomGetData(o1));
+  auto* b = static_cast<GeomImpl*>(dGeomGetData(o2));
+  if (!a || !b || !CollisionManager::MayCollide(*a, *b)) return;
+  (*static_cast<SpaceCallbackData*>(data)->f)(*a, *b);
+}
+
+// Slip speed above which the ball's carpet friction acts against the slip only, m/s (below it the
+// contact sticks, and the pyramid holds it without chatter).
+constexpr double kSlipThreshold = 0.01;
+
+Vec3 PointVelocity(const GeomImpl& g, const Vec3& p) {
+  if (!g.body()) return Vec3::Zero();
+  dVector3 v;
+  dBodyGetPointVel(g.body()->id(), p.x(), p.y(), p.z(), v);
+  return Vec3(v[0], v[1], v[2]);
+}
+
+// Tangential velocity of `a` relative to `b` where the ball touches the carpet (zero for other
+// pairs: walls, goals and robots keep ODE's pyramid, whose behaviour their tests pin down).
+Vec3 BallSlip(const GeomImpl& a, const GeomImpl& b, const Vec3& p, const Vec3& normal) {
+  const auto on_plane = [](const GeomImpl& ball, const GeomImpl& other) {
+    return ball.is_ball() && other.is_plane();
+  };
+  if (!on_plane(a, b) && !on_plane(b, a)) return Vec3::Zero();
+  const Vec3 v = PointVelocity(a, p) - PointVelocity(b, p);
+  return v - normal * normal.dot(v);
+}
+
+}  // namespace
+
+int SpreadContacts(std::vector<dContactGeom>& contacts, int found, int keep) {
+  if (found <= keep) return found;
+  // ODE's colliders return the first points they find, often all along one edge (a convex
+  // resting on a plane gets four neighbouring corners and tips over). Keep the deepest point,
+  // then each time the candidate farthest from those kept: a spread the solver can stand on.
+  std::vector<int> chosen;
+  int deepest = 0;
+  for (int i = 1; i < found; ++i) {
+    if (contacts[static_cast<std::size_t>(i)].depth > contacts[static_cast<std::size_t>(deepest)].depth) deepest = i;
+  }
+  chosen.push_back(deepest);
+  std::vector<double> gap(static_cast<std::size_t>(found), std::numeric_limits<double>::infinity());
+  auto distance2 = [&](int i, int j) {
+    const dReal* p = contacts[static_cast<std::size_t>(i)].pos;
+    const dReal* q = contacts[static_cast<std::size_t>(j)].pos;
+    return (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+  };
+  while (static_cast<int>(chosen.size()) < keep) {
+    int next = -1;
+    for (int i = 0; i < found; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i);
+      gap[k] = std::min(gap[k], distance2(i, chosen.back()));
+      if (std::find(chosen.begin(), chosen.end(), i) == chosen.end() && (next < 0 || gap[k] > gap[static_cast<std::size_t>(next)])) next = i;
+    }
+    chosen.push_back(next);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  std::vector<dContactGeom> kept;
+  for (int i : chosen) kept.push_back(contacts[static_cast<std::size_t>(i)]);
+  std::copy(kept.begin(), kept.end(), contacts.begin());
+  return keep;
+}
+
+// The ball and every wheel's carpet contact meet the carpet here: 89 pairs a Div A step. The
+// formula and its floating-point operations are ODE's own (dCollideSpherePlane, and dCollide's
+// reversal when the plane comes first).
+int CollideSphereAndPlane(dGeomID first, dGeomID second, dContactGeom& c) {
+  const bool sphere_first = dGeomGetClass(first) == dSphereClass;
+  const dGeomID sphere = sphere_first ? first : second;
+  dVector4 p;
+  dGeomPlaneGetParams(sphere_first ? second : first, p);
+  const dReal* centre = dGeomGetPosition(sphere);
+  const dReal radius = dGeomSphereGetRadius(sphere);
+  const dReal k = centre[0] * p[0] + centre[1] * p[1] + centre[2] * p[2];
+  const dReal depth = p[3] - k + radius;
+  if (!(depth >= 0)) return 0;
+  const dReal sign = sphere_first ? 1.0 : -1.0;  // the normal points out of second into first
+  for (int i = 0; i < 3; ++i) {
+    c.pos[i] = centre[i] - p[i] * radius;
+    c.normal[i] = sign * p[i];
+  }
+  c.depth = depth;
+  c.g1 = first;
+  c.g2 = second;
+  c.side1 = -1;
+  c.side2 = -1;
+  return 1;
+}
+
+Broadphase ParseBroadphase(const std::string& name) {
+  if (name == "scene_graph") return Broadphase::kSceneGraph;
+  if (name == "hash") return Broadphase::kHash;
+  if (name == "sap") return Broadphase::kSweepAndPrune;
+  throw std::invalid_argument("unknown broadphase '" + name + "' (scene_graph, hash, sap)");
+}
+
+const char* ToString(Broadphase b) {
+  switch (b) {
+    case Broadphase::kSceneGraph: return "scene_graph";
+    case Broadphase::kHash: return "hash";
+    case Broadphase::kSweepAndPrune: return "sap";
+  }
+  return "unknown";
+}
+
+// ---------------------------------------------------------------------------------------------
+// MaterialTable
+
+void MaterialTable::SetPair(const std::string& a, const std::string& b,
+                            const SurfaceMaterial& surface) {
+  SurfaceMaterial s = surface;
+  s.name = a < b ? a + "|" + b : b + "|" + a;
+  pairs_[std::minmax(a, b)] = s;
+  ++version_;
+}
+
+SurfaceMaterial MaterialTable::Resolve(const SurfaceMaterial& a, const SurfaceMaterial& b) const {
+  if (!pairs_.empty()) {
+    const std::string_view x = a.name, y = b.name;
+    const auto it = pairs_.find(x < y ? std::pair(x, y) : std::pair(y, x));
+    if (it != pairs_.end()) return it->second;
+  }
+  SurfaceMaterial s;
+  s.name = a.name < b.name ? a.name + "|" + b.name : b.name + "|" + a.name;
+  s.mu = GeometricMean(a.mu, b.mu);
+  s.mu2 = GeometricMean(Mu2(a), Mu2(b));
+  s.bounce = std::max(a.bounce, b.bounce);
+  s.bounce_velocity = std::max(a.bounce_velocity, b.bounce_velocity);
+  s.soft_erp = CombineOptional(a.soft_erp, b.soft_erp, [](double x, double y) { return std::min(x, y); });
+  s.soft_cfm = CombineOptional(a.soft_cfm, b.soft_cfm, [](double x, double y) { return std::max(x, y); });
+  s.rolling_friction = std::max(a.rolling_friction, b.rolling_friction);
+  s.slip = std::max(a.slip, b.slip);
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// CollisionManager
+
+CollisionManager::CollisionManager(SceneGraph& graph, Broadphase broadphase, int max_contacts)
+    : graph_(graph),
+      broadphase_(Broadphase::kSceneGraph),
+      max_contacts_(std::clamp(max_contacts, 1, 64)),
+      contacts_(dJointGroupCreate(0)),
+      scratch_(static_cast<std::size_t>(kContactCandidates)) {
+  graph_.SetGeomListener([this](GeomImpl& g) { File(g); }, nullptr);
+  SetBroadphase(broadphase);
+}
+
+CollisionManager::~CollisionManager() {
+  // Geometries outlive us (the scene graph owns them): take them out of our spaces first.
+  Unfile();
+  graph_.SetGeomListener(nullptr, nullptr);
+}
+
+void CollisionManager::Refile() {
+  // Destroyed geometries already left their ODE spaces (dGeomDestroy); the lists beside them
+  // and the caches keyed by their addresses did not.
+  SetBroadphase(broadphase_);
+  balls_found_ = false;
+  balls_.clear();
+  sweep_targets_.clear();
+  surfaces_.clear();
+  ball_touching_.clear();
+}
+
+void CollisionManager::Unfile() {
+  graph_.Root().ForEachGeom([](GeomImpl& g) {
+    if (dSpaceID s = dGeomGetSpace(g.id())) dSpaceRemove(s, g.id());
+  });
+  robot_spaces_.clear();  // each leaves space_ as it goes
+  space_.reset();
+}
+
+void CollisionManager::SetBroadphase(Broadphase broadphase) {
+  Unfile();
+  broadphase_ = broadphase;
+  if (broadphase == Broadphase::kHash) {
+    space_.reset(dHashSpaceCreate(nullptr));
+    // Cells from 2^-6 m (about a ball) to 2^4 m (a wall).
+    dHashSpaceSetLevels(space_.get(), -3, 4);
+  } else if (broadphase == Broadphase::kSweepAndPrune) {
+    space_.reset(dSweepAndPruneSpaceCreate(nullptr, dSAP_AXES_XYZ));
+  }
+  planes_.clear();
+  planes_only_.clear();
+  if (space_) {
+    dSpaceSetCleanup(space_.get(), 0);  // the scene graph owns the geometries
+    // In creation order, the order they were filed in as they came: a world built anew from the
+    // same robots in the same order (a snapshot's) pairs as this one does.
+    std::vector<GeomImpl*> geoms;
+    graph_.Root().ForEachGeom([&geoms](GeomImpl& g) { geoms.push_back(&g); });
+    std::sort(geoms.begin(), geoms.end(), [](const GeomImpl* a, const GeomImpl* b) { return a->serial() < b->serial(); });
+    for (GeomImpl* g : geoms) File(*g);
+  }
+}
+
+void CollisionManager::File(GeomImpl& g) {
+  if (!space_) return;
+  if (g.is_plane()) planes_.push_back(&g);
+  if (g.scope() == ContactScope::kPlanesOnly && !g.is_plane()) {
+    planes_only_.push_back(&g);
+    return;
+  }
+  if (g.robot() && !g.is_plane()) {
+    OdeSpace& robot_space = robot_spaces_[g.robot()];
+    if (!robot_space) {
+      robot_space.reset(dSimpleSpaceCreate(space_.get()));
+      dSpaceSetCleanup(robot_space.get(), 0);  // the scene graph owns the geometries
+    }
+    dSpaceAdd(robot_space.get(), g.id());
+    return;
+  }
+  dSpaceAdd(space_.get(), g.id());
+}
+
+namespace {
+
+// Whether `g`'s contact scope lets it touch `other`.
+bool InScope(const GeomImpl& g, const GeomImpl& other) {
+  switch (g.scope()) {
+    case ContactScope::kAll: return true;
+    case ContactScope::kPlanesOnly: return other.is_plane();
+    case ContactScope::kNoPlanes: return !other.is_plane();
+  }
+  return true;
+}
+
+}  // namespace
+
+bool CollisionManager::MayCollide(const GeomImpl& a, const GeomImpl& b) {
+  if (&a == &b || !a.collides() || !b.collides()) return false;
+  if (!InScope(a, b) || !InScope(b, a)) return false;
+  if (!a.body() && !b.body()) return false;  // two static geometries never move apart
+  if (a.body() == b.body()) return false;
+  // Two robots meet through their hulls only. Wheels, dribbler and kicker sit inside or at the
+  // hull; they touch another robot's parts only when the hulls overlap deeply (a teleport, a
+  // pile-up), and then in arbitrary directions: in the soak such contacts lifted a robot onto
+  // another and over the wall.
+  if (a.robot() && b.robot() && a.robot() != b.robot() && !(a.hull() && b.hull())) return false;
+  const NodeImpl* na = &a.owner();
+  const NodeImpl* nb = &b.owner();
+  return !IsAncestorOrSelf(na, nb) && !IsAncestorOrSelf(nb, na);
+}
+
+namespace {
+
+// The hierarchical bounding-sphere traversal, as a template so the per-pair call inlines.
+template <typename F>
+struct SphereTree {
+  F& f;
+  std::size_t& tests;
+
+  // All pairs inside one subtree: within each child, and between every two children. A node's
+  // own geometries are never paired with its descendants (ancestor rule) nor with each other.
+  void WithinSubtree(const NodeImpl& node) {
+    const auto& children = node.children();
+    for (const auto& c : children) WithinSubtree(*c);
+    for (std::size_t i = 0; i < children.size(); ++i) {
+      for (std::size_t j = i + 1; j < children.size(); ++j) NodeVsNode(*children[i], *children[j]);
+    }
+  }
+
+  // Two disjoint subtrees: prune when their spheres miss, else open the larger one (so a robot
+  // is tested against each opposing robot before any of its wheels is).
+  void NodeVsNode(const NodeImpl& a, const NodeImpl& b) {
+    ++tests;
+    if (!a.Bounds().Overlaps(b.Bounds())) return;
+    if (b.Bounds().radius > a.Bounds().radius) {
+      Open(b, a);
+    } else {
+      Open(a, b);
+    }
+  }
+
+  void Open(const NodeImpl& opened, const NodeImpl& other) {
+    for (const auto& g : opened.geoms()) {
+      if (g->collides()) GeomVsNode(*g, other);
+    }
+    for (const auto& c : opened.children()) NodeVsNode(*c, other);
+  }
+
+  void GeomVsNode(GeomImpl& g, const NodeImpl& node) {
+    const BoundingSphere& gb = g.cached_bounds();
+    ++tests;
+    if (!gb.Overlaps(node.Bounds())) return;
+    for (const auto& h : node.geoms()) {
+      if (!h->collides()) continue;
+      if (!g.body() && !h->body()) continue;
+      if (g.body() == h->body()) continue;
+      if (!InScope(g, *h) || !InScope(*h, g)) continue;
+      ++tests;
+      // Spheres prune the tree; a final box test drops long walls' many false positives.
+      if (gb.Overlaps(h->cached_bounds()) && AabbsOverlap(g.id(), h->id())) f(g, *h);
+    }
+    for (const auto& c : node.children()) GeomVsNode(g, *c);
+  }
+};
+
+}  // namespace
+
+template <typename F>
+void CollisionManager::ForEachPair(F& f) {
+  if (broadphase_ == Broadphase::kSceneGraph) {
+    graph_.UpdateBounds();
+    SphereTree<F>{f, stats_.sphere_tests}.WithinSubtree(graph_.Root());
+    return;
+  }
+  std::function<void(GeomImpl&, GeomImpl&)> call = [&f](GeomImpl& a, GeomImpl& b) { f(a, b); };
+  SpaceCallbackData data{&call};
+  dSpaceCollide(space_.get(), &data, &SpaceNearCallback);
+  for (GeomImpl* g : planes_only_) {
+    for (GeomImpl* plane : planes_) {
+      if (MayCollide(*g, *plane)) f(*g, *plane);
+    }
+  }
+}
+
+void CollisionManager::ForEachCandidatePair(const std::function<void(GeomImpl&, GeomImpl&)>& f) {
+  auto call = [&f](GeomImpl& a, GeomImpl& b) { f(a, b); };
+  ForEachPair(call);
+}
+
+std::vector<std::pair<GeomImpl*, GeomImpl*>> CollisionManager::TouchingPairs() {
+  std::vector<std::pair<GeomImpl*, GeomImpl*>> pairs;
+  ForEachCandidatePair([&](GeomImpl& a, GeomImpl& b) {
+    if (FindContacts(a, b) > 0) pairs.emplace_back(&a, &b);
+  });
+  return pairs;
+}
+
+void CollisionManager::Collide() {
+  stats_ = CollisionStats{};
+  ball_touching_.clear();
+  if (++passes_ % kSurfaceCacheSweepPasses == 0) {
+    std::erase_if(surfaces_, [this](const auto& entry) { return entry.second.last_pass + kSurfaceCacheSweepPasses < passes_; });
+  }
+  auto narrow = [this](GeomImpl& a, GeomImpl& b) { Narrow(a, b); };
+  ForEachPair(narrow);
+  if (swept_ball_step_ > 0) SweepFastBalls();
+}
+
+void CollisionManager::SweepFastBalls() {
+  if (!balls_found_) {  // the scene is complete by the first step; a reset builds a new manager
+    graph_.Root().ForEachGeom([&](GeomImpl& g) {
+      if (g.is_ball() && g.body()) balls_.push_back(&g);
+      if (!g.is_plane()) sweep_targets_.push_back(&g);
+    });
+    balls_found_ = true;
+  }
+  for (GeomImpl* ball : balls_) {
+    if (!ball->collides()) continue;
+    const Vec3 v = ball->body()->GetTwist().linear;
+    const double speed = v.norm();
+    const double radius = ball->GetShape().radius;
+    const double reach = speed * swept_ball_step_;
+    // Slower than half a radius per step, the ordinary contacts catch everything.
+    if (reach <= 0.5 * radius) continue;
+    const Vec3 from = ball->GetPose().position;
+    const Vec3 dir = v / speed;
+    if (!ray_) ray_.reset(dCreateRay(nullptr, 1.0));
+    dGeomRaySetLength(ray_.get(), reach + radius);
+    dGeomRaySet(ray_.get(), from.x(), from.y(), from.z(), dir.x(), dir.y(), dir.z());
+    dGeomRaySetFirstContact(ray_.get(), 0);
+    dGeomRaySetClosestHit(ray_.get(), 1);
+    // The ray's box: only geometries whose boxes it reaches are tested.
+    const Vec3 to = from + dir * (reach + radius);
+    const Vec3 lo = from.cwiseMin(to), hi = from.cwiseMax(to);
+    for (GeomImpl* target : sweep_targets_) {
+      GeomImpl& other = *target;
+      if (&other == ball || !MayCollide(*ball, other)) continue;
+      dReal box[6];
+      dGeomGetAABB(other.id(), box);
+      if (box[1] < lo.x() || box[0] > hi.x() || box[3] < lo.y() || box[2] > hi.y() || box[5] < lo.z() ||
+          box[4] > hi.z()) {
+        continue;
+      }
+      const bool touching = std::any_of(ball_touching_.begin(), ball_touching_.end(), [&](const auto& pair) {
+        return (pair.first == ball && pair.second == &other) || (pair.second == ball && pair.first == &other);
+      });
+      if (touching) continue;  // its contacts are made already
+      dContactGeom hit;
+      if (dCollide(ray_.get(), other.id(), 1, &hit, sizeof(dContactGeom)) <= 0) continue;
+      // The ball's surface reaches `other` within this step: a contact at the surface point,
+      // normal out of `other` toward the ball, no depth (ODE stops the approach there).
+      Vec3 normal = ToVec3(hit.normal);
+      if (normal.dot(dir) > 0) normal = -normal;
+      dContactGeom& cg = scratch_[0];
+      cg = hit;
+      cg.normal[0] = normal.x();
+      cg.normal[1] = normal.y();
+      cg.normal[2] = normal.z();
+      cg.depth = 0.0;
+      cg.g1 = ball->id();
+      cg.g2 = other.id();
+      ++stats_.swept_contacts;
+      AddContacts(*ball, other, 1);
+    }
+  }
+}
+
+void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }
+
+int CollisionManager::FindContacts(GeomImpl& a, GeomImpl& b) {
+  if (SphereAndPlane(a, b)) return CollideSphereAndPlane(a.id(), b.id(), scratch_[0]);
+  if (a.prism() && b.prism()) {
+    const int n = CollideUprightPrisms(*a.prism(), a.GetPose(), *b.prism(), b.GetPose(), max_contacts_, scratch_.data());
+    for (int i = 0; i < n; ++i) {
+      scratch_[static_cast<std::size_t>(i)].g1 = a.id();
+      scratch_[static_cast<std::size_t>(i)].g2 = b.id();
+    }
+    if (n >= 0) return n;  // else not both upright: the general test
+  }
+  const bool a_box = a.GetShape().kind == Shape::Kind::kBox, b_box = b.GetShape().kind == Shape::Kind::kBox;
+  if ((a.prism() && b_box) || (a_box && b.prism())) {
+    GeomImpl& shell = a.prism() ? a : b;
+    GeomImpl& box = a.prism() ? b : a;
+    const int n = CollideUprightPrismWithBox(*shell.prism(), shell.GetPose(), box.GetShape().size, box.GetPose(),
+                                             max_contacts_, scratch_.data());
+    for (int i = 0; i < n; ++i) {
+      dContactGeom& c = scratch_[static_cast<std::size_t>(i)];
+      c.g1 = a.id();
+      c.g2 = b.id();
+      if (&shell == &b) {  // the normal must point out of b into a
+        for (int k = 0; k < 3; ++k) c.normal[k] = -c.normal[k];
+      }
+    }
+    if (n >= 0) return n;
+  }
+  return SpreadContacts(scratch_, dCollide(a.id(), b.id(), kContactCandidates, scratch_.data(), sizeof(dContactGeom)),
+                        max_contacts_);
+}
+
+void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
+  // The sphere-plane test is exact and cheaper than the box test that would skip it.
+  if (!SphereAndPlane(a, b) && AbovePlane(a, b)) return;
+  ++stats_.narrow_tests;
+  const int n = FindContacts(a, b);
+  if (n <= 0) return;
+  ++stats_.touching_pairs;
+  if (a.is_ball() || b.is_ball()) ball_touching_.emplace_back(&a, &b);
+  AddContacts(a, b, n);
+}
+
+const SurfaceMaterial& CollisionManager::PairSurface(const GeomImpl& a, const GeomImpl& b) {
+  // A step touches a few hundred pairs; starting afresh when the cache is full costs one
+  // resolution per pair and keeps memory flat however long a run is.
+  constexpr std::size_t kMaxCachedSurfaces = 4096;
+  if (surfaces_.size() >= kMaxCachedSurfaces && !surfaces_.contains({&a, &b})) surfaces_.clear();
+  auto [it, fresh] = surfaces_.try_emplace({&a, &b});
+  CachedSurface& c = it->second;
+  if (fresh || c.a_version != a.material_version() || c.b_version != b.material_version() ||
+      c.table_version != materials_.version()) {
+    c = CachedSurface{a.material_version(), b.material_version(), materials_.version(),
+                      materials_.Resolve(a.Material(), b.Material())};
+  }
+  c.last_pass = passes_;
+  return c.surface;
+}
+
+void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n) {
+  const SurfaceMaterial& pair_surface = PairSurface(a, b);
+  // The geometry with directional friction (an omni wheel) decides the friction direction.
+  const GeomImpl* directional = a.friction_axis() ? &a : (b.friction_axis() ? &b : nullptr);
+  dWorldID world = graph_.world();
+  for (int i = 0; i < n; ++i) {
+    const dContactGeom& cg = scratch_[static_cast<std::size_t>(i)];
+    SurfaceMaterial& surface = contact_surface_;
+    surface = pair_surface;
+    bool accept = true;
+    const Vec3 position = ToVec3(cg.pos);
+    const Vec3 normal = ToVec3(cg.normal);  // points out of b (g2) into a (g1)
+    // Each side's observers may set its own surface's velocity (a roller fixed to its body).
+    Vec3 moving_a = Vec3::Zero(), moving_b = Vec3::Zero();
+    surface.surface_velocity = Vec3::Zero();
+    for (const auto& h : a.observers()) {
+      h(Contact{&a, &b, b.is_ball(), position, normal, cg.depth}, surface, accept);
+      moving_a = surface.surface_velocity;
+    }
+    surface.surface_velocity = Vec3::Zero();
+    for (const auto& h : b.observers()) {
+      h(Contact{&b, &a, a.is_ball(), position, -normal, cg.depth}, surface, accept);
+      moving_b = surface.surface_velocity;
+    }
+    if (!accept) continue;
+    // ODE's friction rows hold (v1 - v2)·t = motion at the contact, body 1 being a's unless a is
+    // static: then ODE attaches b's body first and turns the normal round. Surfaces moving over
+    // their bodies meet without slip when v1 - v2 = moving2 - moving1.
+    const bool reversed = !a.body() && b.body();
+    const Vec3 ode_normal = reversed ? Vec3(-normal) : normal;
+    Vec3 motion = reversed ? Vec3(moving_a - moving_b) : Vec3(moving_b - moving_a);
+    motion -= normal * normal.dot(motion);
+    const bool surface_moves = motion.norm() > 1e-9;
+
+    dContact c{};
+    c.geom = cg;
+    int mode = dContactApprox1;
+    c.surface.mu = surface.mu;
+    if (directional) {
+      const Quat q = directional->body() ? directional->body()->GetPose().orientation : Quat::Identity();
+      Vec3 dir = q * *directional->friction_axis();
+      dir -= normal * normal.dot(dir);  // project onto the contact plane
+      if (dir.norm() > 1e-6) {
+        dir.normalize();
+        mode |= dContactMu2 | dContactFDir1;
+        c.fdir1[0] = dir.x();
+        c.fdir1[1] = dir.y();
+        c.fdir1[2] = dir.z();
+        c.surface.mu2 = Mu2(surface);
+        if (surface_moves) {
+          mode |= dContactMotion1 | dContactMotion2;
+          c.surface.motion1 = motion.dot(dir);
+          c.surface.motion2 = motion.dot(ode_normal.cross(dir));  // ODE's second direction: n × t1
+        }
+      }
+    } else if (surface_moves) {
+      // Friction pulls toward the moving surface's speed: its direction first, both directions mu.
+      const Vec3 dir = motion.normalized();
+      mode |= dContactFDir1 | dContactMotion1;
+      c.fdir1[0] = dir.x();
+      c.fdir1[1] = dir.y();
+      c.fdir1[2] = dir.z();
+      c.surface.motion1 = motion.norm();
+      if (surface.mu2 >= 0 && surface.mu2 != surface.mu) {
+        mode |= dContactMu2;
+        c.surface.mu2 = surface.mu2;
+      }
+    } else if (const Vec3 slip = BallSlip(a, b, position, normal); slip.norm() > kSlipThreshold) {
+      // ODE's friction is a pyramid: each of two directions holds up to mu·N on its own, so a
+      // ball skidding one way still sticks fully across it (a spinning ball held by a dribbler
+      // could never be carried sideways). Coulomb's cone acts against the slip alone: point the
+      // first direction along the slip, with no friction across it.
+      mode |= dContactMu2 | dContactFDir1;
+      const Vec3 dir = slip.normalized();
+      c.fdir1[0] = dir.x();
+      c.fdir1[1] = dir.y();
+      c.fdir1[2] = dir.z();
+      c.surface.mu2 = 0.0;
+    } else if (surface.mu2 >= 0 && surface.mu2 != surface.mu) {
+      mode |= dContactMu2;
+      c.surface.mu2 = surface.mu2;
+    }
+    if (surface.bounce > 0) {
+      mode |= dContactBounce;
+      c.surface.bounce = surface.bounce;
+      c.surface.bounce_vel = surface.bounce_velocity;
+    }
+    if (surface.soft_erp >= 0) {
+      mode |= dContactSoftERP;
+      c.surface.soft_erp = surface.soft_erp;
+    }
+    if (surface.soft_cfm >= 0) {
+      mode |= dContactSoftCFM;
+      c.surface.soft_cfm = surface.soft_cfm;
+    }
+    if (surface.rolling_friction > 0) {
+      mode |= dContactRolling;
+      c.surface.rho = surface.rolling_friction;
+      c.surface.rho2 = surface.rolling_friction;
+      c.surface.rhoN = surface.rolling_friction;
+    }
+    if (surface.slip > 0) {
+      mode |= dContactSlip1 | dContactSlip2;
+      c.surface.slip1 = surface.slip;
+      c.surface.slip2 = surface.slip;
+    }
+    c.surface.mode = mode;
+    dJointID j = dJointCreateContact(world, contacts_.get(), &c);
+    dJointAttach(j, a.body() ? a.body()->id() : nullptr, b.body() ? b.body()->id() : nullptr);
+    ++stats_.contacts;
+  }
+}
+
+}  // namespace ubersim::kernel

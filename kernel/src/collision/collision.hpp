@@ -1,0 +1,196 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "ubersim/scene.hpp"
+#include "physics/ode_handles.hpp"
+#include "physics/scene_graph.hpp"
+
+namespace ubersim::kernel {
+
+/// How candidate pairs are found before ODE's narrow phase.
+enum class Broadphase {
+  kSceneGraph,     ///< hierarchical bounding spheres over the scene graph (the paper's method)
+  kHash,           ///< ODE's multi-resolution hash space
+  kSweepAndPrune,  ///< ODE's sweep-and-prune space
+};
+
+/// Parses "scene_graph", "hash" or "sap"; throws std::invalid_argument otherwise.
+Broadphase ParseBroadphase(const std::string& name);
+
+/// How many contact points ODE may report for one pair before they are thinned to the world's
+/// max_contacts. (Asking ODE for max_contacts alone gives its first-found points: a chassis
+/// pushed against a wall then jitters at 6 cm/s, and measured no faster.)
+inline constexpr int kContactCandidates = 64;
+
+/// Thins the first `found` contacts to at most `keep`: the deepest, then each time the one
+/// farthest from those kept (ODE reports points in the order it finds them, often along one
+/// edge). Returns how many remain at the front of `contacts`.
+int SpreadContacts(std::vector<dContactGeom>& contacts, int found, int keep);
+
+/// The contact of a sphere and a plane, `first` and `second` in either order: bit for bit what
+/// dCollide(first, second) gives, without its dispatch. Returns 1 when they touch, else 0.
+int CollideSphereAndPlane(dGeomID first, dGeomID second, dContactGeom& contact);
+/// The model-file name of a broadphase.
+const char* ToString(Broadphase b);
+
+/// Contact parameters by pair of material names, with a rule for pairs not in the table.
+class MaterialTable {
+ public:
+  /// Sets the surface used when materials `a` and `b` touch (either order).
+  void SetPair(const std::string& a, const std::string& b, const SurfaceMaterial& surface);
+  /// Counts SetPair calls (surfaces resolved before a change are stale after it).
+  std::uint64_t version() const { return version_; }
+  /// The surface for two touching materials: the table entry when there is one, else the
+  /// combination: mu and mu2 geometric means, bounce and bounce velocity the larger, ERP the
+  /// smaller and CFM the larger of those set, rolling friction and slip the larger.
+  SurfaceMaterial Resolve(const SurfaceMaterial& a, const SurfaceMaterial& b) const;
+  /// Number of explicit pairs.
+  std::size_t size() const { return pairs_.size(); }
+
+ private:
+  // Compares (name, name) pairs of strings or string views alike, so a lookup copies no string
+  // (it runs for every touching pair of every step).
+  struct NamePairLess {
+    using is_transparent = void;
+    template <class A, class B>
+    bool operator()(const A& x, const B& y) const {
+      const std::string_view x1 = x.first, x2 = x.second, y1 = y.first, y2 = y.second;
+      return x1 < y1 || (x1 == y1 && x2 < y2);
+    }
+  };
+  std::map<std::pair<std::string, std::string>, SurfaceMaterial, NamePairLess> pairs_;
+  std::uint64_t version_ = 0;
+};
+
+/// Counters of the last Collide() call.
+struct CollisionStats {
+  std::size_t sphere_tests = 0;    ///< bounding-sphere overlap tests (scene-graph broadphase)
+  std::size_t narrow_tests = 0;    ///< pairs whose contacts were computed (dCollide or an exact test of our own)
+  std::size_t touching_pairs = 0;  ///< pairs with at least one contact
+  std::size_t contacts = 0;        ///< contact joints created
+  std::size_t swept_contacts = 0;  ///< of those, speculative contacts of fast balls
+};
+
+/// Finds colliding geometry pairs over the scene graph and turns contacts into ODE contact joints
+/// with parameters from the material table, directional friction and rolling resistance; lets
+/// observers see and change each contact first. Never pairs a node with itself, its ancestors
+/// or its descendants, two static geometries, or two geometries of one body.
+class CollisionManager {
+ public:
+  /// Files every geometry of `graph` (and later ones) for the chosen broadphase.
+  CollisionManager(SceneGraph& graph, Broadphase broadphase, int max_contacts_per_pair);
+  ~CollisionManager();
+  CollisionManager(const CollisionManager&) = delete;
+  CollisionManager& operator=(const CollisionManager&) = delete;
+
+  /// Switches the broadphase (files existing geometries into or out of the ODE space, in the
+  /// order they were created).
+  void SetBroadphase(Broadphase broadphase);
+  /// The broadphase in use.
+  Broadphase broadphase() const { return broadphase_; }
+  /// The material-pair table.
+  MaterialTable& materials() { return materials_; }
+
+  /// Calls `f` for every candidate pair the broadphase yields after the exclusion rules, in a
+  /// deterministic order. Bounding spheres are refreshed first.
+  void ForEachCandidatePair(const std::function<void(GeomImpl&, GeomImpl&)>& f);
+  /// Broadphase + narrow phase: every pair that touches now (no joints are created).
+  std::vector<std::pair<GeomImpl*, GeomImpl*>> TouchingPairs();
+  /// Broadphase + narrow phase, creating contact joints for the next physics step.
+  void Collide();
+  /// Turns on the swept test of fast balls for a physics step of `dt` s: a ball that would
+  /// travel more than half its radius in one step casts a ray along its velocity, and whatever
+  /// it would reach within the step gets a contact now (a speculative contact, at the surface),
+  /// so a shot cannot cross a robot's shell or a wall between two steps. 0 turns it off.
+  void SetSweptBallStep(double dt) { swept_ball_step_ = dt; }
+  /// Removes the contact joints of the last step.
+  void ClearContacts();
+  /// Files every geometry anew (SetBroadphase: in creation order) and drops every cache that may
+  /// name one: whenever robots come or go. A world built anew from the same robots in the same
+  /// order (a snapshot's) then pairs as the original does.
+  void Refile();
+  /// Counters of the last Collide().
+  const CollisionStats& stats() const { return stats_; }
+  /// How many pairs' resolved surfaces are cached now (bounded, however long the run).
+  std::size_t cached_surfaces() const { return surfaces_.size(); }
+  /// Every this many Collide() passes, the surfaces of pairs that have not touched for as many
+  /// passes are dropped: the cache holds what touches lately, so memory stays flat all day.
+  static constexpr std::uint64_t kSurfaceCacheSweepPasses = 1000;
+
+  /// True when the exclusion rules let a and b collide at all.
+  static bool MayCollide(const GeomImpl& a, const GeomImpl& b);
+
+ private:
+  void Narrow(GeomImpl& a, GeomImpl& b);
+  // The contacts of a and b into scratch_ (two upright robot shells by their own test, the rest
+  // by ODE's), at most max_contacts_; returns how many.
+  int FindContacts(GeomImpl& a, GeomImpl& b);
+  // Makes contact joints for the first n contacts in scratch_ (observers, surfaces, friction).
+  void AddContacts(GeomImpl& a, GeomImpl& b, int n);
+  // The swept test of every fast ball (SetSweptBallStep).
+  void SweepFastBalls();
+  template <typename F>
+  void ForEachPair(F& f);
+  // Files a geometry: into the ODE space, or, when it touches planes only, beside it.
+  void File(GeomImpl& g);
+  // Takes every geometry out of the ODE spaces and drops the spaces.
+  void Unfile();
+  // The resolved surface of two touching geometries, cached per pair while neither material
+  // nor the table changes (resolving compares and joins names: every contact, every step).
+  const SurfaceMaterial& PairSurface(const GeomImpl& a, const GeomImpl& b);
+
+  struct CachedSurface {
+    std::uint64_t a_version, b_version, table_version;
+    SurfaceMaterial surface;
+    std::uint64_t last_pass = 0;  // the Collide() pass that last used it
+  };
+  struct PairHash {
+    std::size_t operator()(const std::pair<const GeomImpl*, const GeomImpl*>& p) const {
+      return std::hash<const void*>()(p.first) * 31 + std::hash<const void*>()(p.second);
+    }
+  };
+
+  SceneGraph& graph_;
+  Broadphase broadphase_;
+  int max_contacts_;
+  MaterialTable materials_;
+  CollisionStats stats_;
+  OdeSpace space_;        // only for the ODE broadphases
+  OdeJointGroup contacts_;
+  std::vector<dContactGeom> scratch_;
+  double swept_ball_step_ = 0.0;
+  std::vector<std::pair<const GeomImpl*, const GeomImpl*>> ball_touching_;  // this step's ball pairs
+  OdeGeom ray_;           // the swept test's ray, reused
+  std::vector<GeomImpl*> balls_;  // the balls, found at the first swept test
+  std::vector<GeomImpl*> sweep_targets_;  // what a swept ball may reach: every geometry but planes
+  bool balls_found_ = false;
+  // With an ODE space: the planes, and the geometries that touch planes only (wheel ground
+  // contacts, supports: nearly half a robot's). Those stay out of the space, where they would
+  // be sorted and paired with everything near them each step only to be refused, and meet the
+  // planes directly.
+  std::vector<GeomImpl*> planes_;
+  std::vector<GeomImpl*> planes_only_;
+  // With an ODE space: each robot's other geometries in a simple space of their own inside it.
+  // The broadphase then sorts one box per robot instead of each part's (pairs of one robot's
+  // parts are all refused anyway), and a robot's box above the carpet skips its parts' plane
+  // tests at once. Declared after space_: destroyed first, leaving it.
+  std::unordered_map<const NodeImpl*, OdeSpace> robot_spaces_;
+  // Resolved surfaces of the pairs that touched lately: a long run brings ever new pairs of
+  // robot parts together, up to tens of thousands, so stale ones are swept out (and a hard
+  // bound in collision.cpp).
+  std::unordered_map<std::pair<const GeomImpl*, const GeomImpl*>, CachedSurface, PairHash> surfaces_;
+  std::uint64_t passes_ = 0;  // Collide() calls so far
+  SurfaceMaterial contact_surface_;  // reused per contact: no allocation once warm
+};
+
+}  // namespace ubersim::kernel

@@ -1,0 +1,107 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "physics/lone_body.hpp"
+
+#include <cstring>
+
+namespace ubersim::kernel {
+
+bool IsLoneBody(dBodyID body) {
+  // dBodyGetJoint(body, 0) is one pointer read; dBodyGetNumJoints walks the whole list.
+  return dBodyIsEnabled(body) && dBodyGetJoint(body, 0) == nullptr && !dBodyIsKinematic(body) &&
+         !dBodyGetFiniteRotationMode(body) && dBodyGetLinearDamping(body) == 0 &&
+         dBodyGetAngularDamping(body) == 0 && dBodyGetMaxAngularSpeed(body) == dInfinity;
+}
+
+const dReal* LoneBodyStepper::BodyInverseInertia(dBodyID body, const dMass& mass) {
+  // Cached per body and checked against the inertia it came from: a pure function of it, so a
+  // body ID ODE reuses for a new body finds either the right inverse or a stale one it replaces.
+  InverseInertia& cached = inverse_inertia_[body];
+  if (std::memcmp(cached.inertia, mass.I, sizeof mass.I) != 0 || cached.inverse[0] == 0) {
+    std::memcpy(cached.inertia, mass.I, sizeof mass.I);
+    // What dBodySetMass stored: the Cholesky inverse, or the identity for an inertia that is
+    // not positive definite.
+    if (dInvertPDMatrix(mass.I, cached.inverse, 3) == 0) dRSetIdentity(cached.inverse);
+  }
+  return cached.inverse;
+}
+
+// The order of every operation below is QuickStep's (quickstep.cpp, stages 0 and 6, and
+// dxStepBody in util.cpp), with ODE's own inline helpers: any other order changes the last bits.
+void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
+  if (inverse_inertia_.size() > 4096) inverse_inertia_.clear();  // bodies come and go: bound it
+  dMass mass;
+  dBodyGetMass(body, &mass);
+  const dReal* rotation = dBodyGetRotation(body);
+
+  dVector3 force, torque;
+  std::memcpy(force, dBodyGetForce(body), sizeof force);
+  std::memcpy(torque, dBodyGetTorque(body), sizeof torque);
+  if (dBodyGetGravityMode(body)) {
+    // Only the non-zero components: adding m·0 would turn a -0 force into +0.
+    for (int k = 0; k < 3; ++k) {
+      if (gravity[k] != 0) force[k] += mass.mass * gravity[k];
+    }
+  }
+
+  // The inverse inertia in the world frame.
+  dMatrix3 tmp = {};
+  dMatrix3 inverse_inertia = {};
+  dMultiply2_333(tmp, BodyInverseInertia(body, mass), rotation);
+  dMultiply0_333(inverse_inertia, rotation, tmp);
+
+  dVector3 angular;
+  std::memcpy(angular, dBodyGetAngularVel(body), sizeof angular);
+  const dReal inverse_mass = dRecip(mass.mass);
+  if (dBodyGetGyroscopicMode(body) && inverse_mass > 0) {
+    // The implicit gyroscopic torque (Lacoursière 2006), as QuickStep computes it.
+    dMatrix3 inertia = {};
+    dMultiply2_333(tmp, mass.I, rotation);
+    dMultiply0_333(inertia, rotation, tmp);
+    dVector3 momentum;
+    dMultiply0_331(momentum, inertia, angular);
+    dMatrix3 tilde = {};
+    dSetCrossMatrixMinus(tilde, momentum, 4);
+    for (int i = 0; i < 12; ++i) tilde[i] = tilde[i] * dt + inertia[i];
+    dScaleVector3(momentum, dRecip(dt));
+    dMatrix3 tilde_inverse = {};
+    if (dInvertMatrix3(tilde_inverse, tilde) != 0) {
+      dMultiply0_333(tilde, inertia, tilde_inverse);
+      tilde[0] -= 1;
+      tilde[5] -= 1;
+      tilde[10] -= 1;
+      dVector3 gyroscopic;
+      dMultiply0_331(gyroscopic, tilde, momentum);
+      dAddVectors3(torque, torque, gyroscopic);
+    }
+  }
+
+  // Velocities.
+  dVector3 linear;
+  std::memcpy(linear, dBodyGetLinearVel(body), sizeof linear);
+  const dReal impulse_per_force = dt * inverse_mass;
+  for (int k = 0; k < 3; ++k) {
+    linear[k] += impulse_per_force * force[k];
+    torque[k] *= dt;
+  }
+  dMultiplyAdd0_331(angular, inverse_inertia, torque);
+
+  // Pose: dBodySetQuaternion normalises and converts to the rotation matrix as dxStepBody does,
+  // and each setter tells the body's geometries that it moved.
+  dVector3 position;
+  std::memcpy(position, dBodyGetPosition(body), sizeof position);
+  for (int k = 0; k < 3; ++k) position[k] += dt * linear[k];
+  dQuaternion q;
+  std::memcpy(q, dBodyGetQuaternion(body), sizeof q);
+  dReal dq[4];
+  dDQfromW(dq, angular, q);
+  for (int k = 0; k < 4; ++k) q[k] += dt * dq[k];
+
+  dBodySetLinearVel(body, linear[0], linear[1], linear[2]);
+  dBodySetAngularVel(body, angular[0], angular[1], angular[2]);
+  dBodySetPosition(body, position[0], position[1], position[2]);
+  dBodySetQuaternion(body, q);
+  dBodySetForce(body, 0, 0, 0);
+  dBodySetTorque(body, 0, 0, 0);
+}
+
+}  // namespace ubersim::kernel

@@ -1,0 +1,260 @@
+// SPDX-License-Identifier: Apache-2.0
+// Two upright robot shells meet in CollideUprightPrisms: it must find the same depth and normal
+// as a brute-force separating-axis search over the outline's own polygon, agree with ODE's
+// mesh-against-mesh test on touching or not, and step aside (-1) for a tilted shell.
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "physics/ode_handles.hpp"
+#include "physics/scene_graph.hpp"
+#include "collision/upright_prism.hpp"
+
+namespace ubersim::kernel {
+namespace {
+
+const FlatFrontPrism kShell{0.09, 0.07, 0.0655};   // the modern robot's
+const FlatFrontPrism kRound{0.09, 0.09, 0.0655};   // no flat face
+
+// The outline of the shell's mesh seen from above (its ring's vertices), at `pose`.
+std::vector<Eigen::Vector2d> Outline(const FlatFrontPrism& p, const Pose& pose) {
+  std::vector<Eigen::Vector2d> out;
+  const Shape mesh = FlatFrontPrismMesh(p);
+  for (const Vec3& v : mesh.vertices) {
+    if (v.z() > 0 || v.head<2>().norm() < 1e-9) continue;  // one ring; not the cap centre
+    const Vec3 w = pose.Transform(v);
+    out.emplace_back(w.x(), w.y());
+  }
+  return out;
+}
+
+// Least overlap over 20000 directions and the direction (from a to b) that gives it.
+double BruteForceDepth(const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b,
+                       Eigen::Vector2d& normal) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 20000; ++i) {
+    const double angle = 2.0 * M_PI * i / 20000;
+    const Eigen::Vector2d n(std::cos(angle), std::sin(angle));
+    double max_a = -1e9, min_b = 1e9;
+    for (const auto& p : a) max_a = std::max(max_a, n.dot(p));
+    for (const auto& p : b) min_b = std::min(min_b, n.dot(p));
+    if (max_a - min_b < best) {
+      best = max_a - min_b;
+      normal = n;
+    }
+  }
+  return best;
+}
+
+Pose Upright(double x, double y, double yaw) { return Pose::FromYaw(Vec3(x, y, 0.08), yaw); }
+
+TEST(UprightPrism, DepthAndNormalMatchABruteForceSearch) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> near(-0.2, 0.2), turn(-M_PI, M_PI);
+  int touching = 0, face_cases = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const FlatFrontPrism& shape_b = trial % 4 == 3 ? kRound : kShell;
+    const Pose pa = Upright(0, 0, turn(rng));
+    const Pose pb = Upright(near(rng), near(rng), turn(rng));
+    dContactGeom contacts[4];
+    const int n = CollideUprightPrisms(kShell, pa, shape_b, pb, 4, contacts);
+    ASSERT_GE(n, 0);
+    Eigen::Vector2d normal;
+    const double depth = BruteForceDepth(Outline(kShell, pa), Outline(shape_b, pb), normal);
+    // The mesh's chords lie up to 0.33 mm inside the arc; 20000 directions add a micrometre.
+    if (depth > 0.5e-3) {
+      ASSERT_GT(n, 0) << "trial " << trial << ": brute force finds " << depth << " m";
+      EXPECT_NEAR(contacts[0].depth, depth, 0.7e-3) << "trial " << trial;
+      // Normal out of b into a: against the brute force's a-to-b direction.
+      EXPECT_GT(-(contacts[0].normal[0] * normal.x() + contacts[0].normal[1] * normal.y()), std::cos(0.1))
+          << "trial " << trial;
+      EXPECT_EQ(contacts[0].normal[2], 0.0);
+      ++touching;
+      face_cases += n == 4;
+    } else if (depth < -0.5e-3) {
+      EXPECT_EQ(n, 0) << "trial " << trial << ": apart by " << -depth << " m";
+    }
+  }
+  EXPECT_GT(touching, 100);  // the random placements must test contacts, not only gaps
+  RecordProperty("touching", touching);
+  RecordProperty("face_to_face", face_cases);
+}
+
+TEST(UprightPrism, FacesPressedTogetherTouchAlongTheirSharedStretch) {
+  // Face to face, 1 mm into each other, offset 1 cm sideways: four contacts at the ends of the
+  // shared stretch of face, at the bottom and top of the shared height.
+  const Pose pa = Upright(0, 0, 0);
+  const Pose pb = Upright(0.139, 0.01, M_PI);
+  dContactGeom c[4];
+  ASSERT_EQ(CollideUprightPrisms(kShell, pa, kShell, pb, 4, c), 4);
+  const double half_width = std::sqrt(0.09 * 0.09 - 0.07 * 0.07);
+  double y_min = 1, y_max = -1;
+  for (const dContactGeom& k : c) {
+    EXPECT_NEAR(k.depth, 0.001, 1e-9);
+    EXPECT_NEAR(k.normal[0], -1.0, 1e-9);  // out of b (in front, +x) into a
+    EXPECT_NEAR(k.pos[0], 0.0695, 1e-9);
+    y_min = std::min(y_min, k.pos[1]);
+    y_max = std::max(y_max, k.pos[1]);
+  }
+  EXPECT_NEAR(y_min, -half_width + 0.01, 1e-9);
+  EXPECT_NEAR(y_max, half_width, 1e-9);
+  EXPECT_EQ(CollideUprightPrisms(kShell, pa, kShell, pb, 1, c), 1);  // one, in the middle
+  EXPECT_NEAR(c[0].pos[1], 0.005, 1e-9);
+  EXPECT_NEAR(c[0].pos[2], 0.08, 1e-9);
+}
+
+TEST(UprightPrism, AgreesWithOdesMeshTestOnTouching) {
+  OdeLibrary ode;
+  OdeWorld world(dWorldCreate());
+  SceneGraph graph(world.get());
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> near(-0.2, 0.2), turn(-M_PI, M_PI);
+  int agreed = 0, touching = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const Pose pa = Upright(0, 0, turn(rng));
+    const Pose pb = Upright(near(rng), near(rng), turn(rng));
+    SceneNode& node = graph.Root().AddChild("t" + std::to_string(trial));
+    auto& a = static_cast<GeomImpl&>(node.AddGeom(GeomSpec{"a", FlatFrontPrismMesh(kShell), pa, {}, {}, true}, nullptr));
+    auto& b = static_cast<GeomImpl&>(node.AddGeom(GeomSpec{"b", FlatFrontPrismMesh(kShell), pb, {}, {}, true}, nullptr));
+    dContactGeom mesh[64], ours[4];
+    const bool mesh_touch = dCollide(a.id(), b.id(), 64, mesh, sizeof(dContactGeom)) > 0;
+    const int n = CollideUprightPrisms(kShell, a.GetPose(), kShell, b.GetPose(), 4, ours);
+    Eigen::Vector2d normal;
+    const double depth = BruteForceDepth(Outline(kShell, pa), Outline(kShell, pb), normal);
+    if (std::abs(depth) < 1e-3) continue;  // within the mesh's chord error either answer is right
+    EXPECT_EQ(n > 0, mesh_touch) << "trial " << trial << ", depth " << depth;
+    agreed += (n > 0) == mesh_touch;
+    touching += mesh_touch;
+  }
+  EXPECT_GT(touching, 50);
+  EXPECT_GT(agreed, 250);
+}
+
+TEST(UprightPrism, ATiltedShellIsLeftToTheGeneralTest) {
+  dContactGeom c[4];
+  const Pose pa = Upright(0, 0, 0);
+  Pose tilted = Upright(0.15, 0, 0);
+  tilted.orientation = Quat(Eigen::AngleAxisd(0.5 * kUprightTilt, Vec3::UnitY()));
+  EXPECT_GE(CollideUprightPrisms(kShell, pa, kShell, tilted, 4, c), 0);
+  tilted.orientation = Quat(Eigen::AngleAxisd(2.0 * kUprightTilt, Vec3::UnitY()));
+  EXPECT_EQ(CollideUprightPrisms(kShell, pa, kShell, tilted, 4, c), -1);
+  EXPECT_EQ(CollideUprightPrisms(kShell, tilted, kShell, pa, 4, c), -1);
+}
+
+TEST(UprightPrism, ALeaningShellTouchesWhereItLeans) {
+  // Round shells 1 mm apart; a leans 0.05 rad toward b: its top reaches 3.3 mm further, its
+  // bottom 3.3 mm less. They touch at the top only, 2.3 mm deep.
+  Pose leaning = Upright(0, 0, 0);
+  leaning.orientation = Quat(Eigen::AngleAxisd(0.05, Vec3::UnitY()));
+  const Pose upright = Upright(0.181, 0, 0);
+  dContactGeom c[4];
+  ASSERT_EQ(CollideUprightPrisms(kRound, leaning, kRound, upright, 4, c), 1);
+  const double reach = kRound.half_height * std::cos(0.05) * std::tan(0.05);
+  EXPECT_NEAR(c[0].depth, reach - 0.001, 1e-5);
+  EXPECT_NEAR(c[0].pos[2], 0.08 + kRound.half_height * std::cos(0.05), 1e-9);
+  EXPECT_NEAR(c[0].normal[0], -1.0, 1e-9);
+}
+
+TEST(UprightPrism, ShellsAtDifferentHeightsDoNotTouch) {
+  dContactGeom c[4];
+  EXPECT_EQ(CollideUprightPrisms(kShell, Upright(0, 0, 0), kShell, Pose::FromYaw(Vec3(0.1, 0, 0.3), 0), 4, c), 0);
+}
+
+// A box's outline seen from above, at its pose.
+std::vector<Eigen::Vector2d> BoxOutline(const Vec3& size, const Pose& pose) {
+  std::vector<Eigen::Vector2d> out;
+  for (int k = 0; k < 4; ++k) {
+    const Vec3 w = pose.Transform(Vec3((k & 1 ? -0.5 : 0.5) * size.x(), (k & 2 ? -0.5 : 0.5) * size.y(), 0.0));
+    out.emplace_back(w.x(), w.y());
+  }
+  return out;
+}
+
+TEST(UprightPrismWithBox, DepthAndNormalMatchABruteForceSearch) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> near(-0.25, 0.25), turn(-M_PI, M_PI), thickness(0.01, 0.3);
+  int touching = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const FlatFrontPrism& shell = trial % 4 == 3 ? kRound : kShell;
+    const Pose ps = Upright(near(rng), near(rng), turn(rng));
+    const Vec3 size(thickness(rng), thickness(rng) + 0.2, 0.16);
+    const Pose pb = Pose::FromYaw(Vec3(0, 0, 0.08), turn(rng));
+    dContactGeom c[4];
+    const int n = CollideUprightPrismWithBox(shell, ps, size, pb, 4, c);
+    ASSERT_GE(n, 0) << "trial " << trial;
+    Eigen::Vector2d normal;  // from the shell to the box
+    const double depth = BruteForceDepth(Outline(shell, ps), BoxOutline(size, pb), normal);
+    if (depth > 0.5e-3) {
+      ASSERT_GT(n, 0) << "trial " << trial << ": brute force finds " << depth << " m";
+      for (int i = 0; i < n; ++i) {
+        EXPECT_NEAR(c[i].depth, depth, 0.7e-3) << "trial " << trial;
+        // Out of the box into the shell: against the brute force's shell-to-box direction.
+        EXPECT_GT(-(c[i].normal[0] * normal.x() + c[i].normal[1] * normal.y()), std::cos(0.1)) << "trial " << trial;
+        EXPECT_EQ(c[i].normal[2], 0.0);
+        // Where they touch lies within reach of both: inside the box grown by the depth and
+        // inside the shell's disc grown by it.
+        const Vec3 local = pb.orientation.conjugate() * (Vec3(c[i].pos[0], c[i].pos[1], 0.08) - pb.position);
+        EXPECT_LT(std::abs(local.x()), 0.5 * size.x() + depth + 1e-9) << "trial " << trial;
+        EXPECT_LT(std::abs(local.y()), 0.5 * size.y() + depth + 1e-9) << "trial " << trial;
+        EXPECT_LT(std::hypot(c[i].pos[0] - ps.position.x(), c[i].pos[1] - ps.position.y()), shell.radius + 1e-9);
+      }
+      ++touching;
+    } else if (depth < -0.5e-3) {
+      EXPECT_EQ(n, 0) << "trial " << trial << ": apart by " << -depth << " m";
+    }
+  }
+  EXPECT_GT(touching, 100);
+}
+
+TEST(UprightPrismWithBox, AShellPushedIntoAThinWallFromBehindIsPushedBackOut) {
+  // The soak's finding: a robot put 4 mm into a goal's 2 cm back wall from behind. ODE's mesh
+  // test took the hollow shell's far side and pushed it through and over; the way out is back.
+  const Vec3 wall(0.02, 1.2, 0.16);
+  const Pose wall_pose = Pose::FromYaw(Vec3(6.19, 0, 0.08), 0);
+  const double behind = 6.2 + 0.09 - 0.004;
+  for (double yaw : {0.0, 0.5 * M_PI, 2.0}) {  // the arc toward the wall
+    dContactGeom c[4];
+    const int n = CollideUprightPrismWithBox(kShell, Upright(behind, -0.319, yaw), wall, wall_pose, 4, c);
+    ASSERT_EQ(n, 2) << "yaw " << yaw;  // one spot, at the bottom and the top
+    for (int i = 0; i < n; ++i) {
+      EXPECT_NEAR(c[i].normal[0], 1.0, 1e-12) << "yaw " << yaw;
+      EXPECT_NEAR(c[i].depth, 0.004, 1e-12) << "yaw " << yaw;
+      EXPECT_NEAR(c[i].pos[0], 6.2 - 0.002, 1e-9);
+      EXPECT_NEAR(c[i].pos[1], -0.319, 1e-9);
+    }
+  }
+  // The flat face toward the wall reaches 2 cm less far: apart.
+  dContactGeom c[4];
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, Upright(behind, -0.319, M_PI), wall, wall_pose, 4, c), 0);
+  // Its face pressed flat against the wall: the ends of the face at the bottom and the top.
+  ASSERT_EQ(CollideUprightPrismWithBox(kShell, Upright(6.2 + 0.07 - 0.001, 0, M_PI), wall, wall_pose, 4, c), 4);
+  EXPECT_NEAR(std::abs(c[0].pos[1]), std::sqrt(0.09 * 0.09 - 0.07 * 0.07), 1e-9);
+  EXPECT_NEAR(c[0].depth, 0.001, 1e-12);
+  // One contact allowed: the face's middle, half way up.
+  ASSERT_EQ(CollideUprightPrismWithBox(kShell, Upright(6.2 + 0.07 - 0.001, 0, M_PI), wall, wall_pose, 1, c), 1);
+  EXPECT_NEAR(c[0].pos[1], 0.0, 1e-9);
+  EXPECT_NEAR(c[0].pos[2], 0.08, 1e-9);
+}
+
+TEST(UprightPrismWithBox, TiltedBoxesLeaningShellsAndWallTopsAreLeftToTheGeneralTest) {
+  dContactGeom c[4];
+  const Vec3 wall(0.02, 1.0, 0.1);
+  Pose tilted = Pose::FromYaw(Vec3(0.1, 0, 0.05), 0);
+  tilted.orientation = Quat(Eigen::AngleAxisd(0.2, Vec3::UnitX()));
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, Upright(0, 0, 0), wall, tilted, 4, c), -1);
+  Pose leaning = Upright(0, 0, 0);
+  leaning.orientation = Quat(Eigen::AngleAxisd(2.0 * kUprightTilt, Vec3::UnitY()));
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, leaning, wall, Pose::FromYaw(Vec3(0.1, 0, 0.05), 0), 4, c), -1);
+  // A shell whose bottom is 5 mm into a 10 cm wall's top, its centre over the wall.
+  const Pose on_top = Pose::FromYaw(Vec3(0.0, 0.0, 0.1 + kShell.half_height - 0.005), 0);
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, on_top, wall, Pose::FromYaw(Vec3(0, 0, 0.05), 0), 4, c), -1);
+  // Above the wall: apart.
+  const Pose above = Pose::FromYaw(Vec3(0.0, 0.0, 0.1 + kShell.half_height + 0.005), 0);
+  EXPECT_EQ(CollideUprightPrismWithBox(kShell, above, wall, Pose::FromYaw(Vec3(0, 0, 0.05), 0), 4, c), 0);
+}
+
+}  // namespace
+}  // namespace ubersim::kernel

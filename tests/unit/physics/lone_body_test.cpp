@@ -1,0 +1,199 @@
+// SPDX-License-Identifier: Apache-2.0
+// LoneBodyStepper: a body no joint touches, stepped by the kernel, ends every step bit for bit
+// where QuickStep puts it; IsLoneBody leaves to ODE what the stepper does not reproduce.
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <ode/ode.h>
+
+#include "physics/lone_body.hpp"
+#include "physics/ode_handles.hpp"
+
+namespace {
+
+using ubersim::kernel::IsLoneBody;
+using ubersim::kernel::LoneBodyStepper;
+using ubersim::kernel::OdeLibrary;
+using ubersim::kernel::OdeSpace;
+using ubersim::kernel::OdeWorld;
+
+constexpr double kStep = 0.005;
+
+OdeWorld MakeWorld() {
+  OdeWorld w(dWorldCreate());
+  dWorldSetGravity(w.get(), 0.3, 0, -9.81);  // a tilted gravity: two components to add
+  dWorldSetAutoDisableFlag(w.get(), 0);
+  return w;
+}
+
+// The first `n` values of a and b differ in some bit: names the first that does.
+std::string BitDifference(const char* what, const dReal* a, const dReal* b, int n) {
+  for (int i = 0; i < n; ++i) {
+    if (std::memcmp(&a[i], &b[i], sizeof(dReal)) != 0) {
+      return std::string(what) + "[" + std::to_string(i) + "]: " + std::to_string(a[i]) + " vs " +
+             std::to_string(b[i]);
+    }
+  }
+  return "";
+}
+
+// Every bit of the state QuickStep writes, or the first difference.
+std::string StateDifference(dBodyID a, dBodyID b) {
+  const std::array<std::string, 7> diffs = {
+      BitDifference("position", dBodyGetPosition(a), dBodyGetPosition(b), 3),
+      BitDifference("quaternion", dBodyGetQuaternion(a), dBodyGetQuaternion(b), 4),
+      BitDifference("rotation", dBodyGetRotation(a), dBodyGetRotation(b), 11),
+      BitDifference("linear velocity", dBodyGetLinearVel(a), dBodyGetLinearVel(b), 3),
+      BitDifference("angular velocity", dBodyGetAngularVel(a), dBodyGetAngularVel(b), 3),
+      BitDifference("force", dBodyGetForce(a), dBodyGetForce(b), 3),
+      BitDifference("torque", dBodyGetTorque(a), dBodyGetTorque(b), 3),
+  };
+  for (const std::string& d : diffs) {
+    if (!d.empty()) return d;
+  }
+  return "";
+}
+
+// A body with a random inertia tensor (a box turned arbitrarily: off-diagonal terms), pose and
+// velocities, the same in both worlds.
+struct Twin {
+  dBodyID kernel;
+  dBodyID ode;
+};
+
+Twin MakeTwin(dWorldID kernel_world, dWorldID ode_world, std::mt19937_64& rng, int index) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  dMass mass;
+  dMassSetBoxTotal(&mass, 0.05 + 3.0 * (u(rng) + 1.0), 0.02 + 0.2 * (u(rng) + 1.0), 0.02 + 0.2 * (u(rng) + 1.0),
+                   0.02 + 0.2 * (u(rng) + 1.0));
+  dMatrix3 turn;
+  dRFromEulerAngles(turn, 3 * u(rng), 3 * u(rng), 3 * u(rng));
+  dMassRotate(&mass, turn);
+  dQuaternion q = {u(rng), u(rng), u(rng), u(rng)};
+  dNormalize4(q);
+  const std::array<double, 3> p = {u(rng), u(rng), 1 + u(rng)};
+  const std::array<double, 3> v = {6 * u(rng), 6 * u(rng), 3 * u(rng)};
+  const std::array<double, 3> w = {20 * u(rng), 20 * u(rng), 40 * u(rng)};
+  Twin t{dBodyCreate(kernel_world), dBodyCreate(ode_world)};
+  for (dBodyID b : {t.kernel, t.ode}) {
+    dBodySetMass(b, &mass);
+    dBodySetPosition(b, p[0], p[1], p[2]);
+    dBodySetQuaternion(b, q);
+    dBodySetLinearVel(b, v[0], v[1], v[2]);
+    dBodySetAngularVel(b, w[0], w[1], w[2]);
+    if (index % 5 == 1) dBodySetGravityMode(b, 0);       // a body gravity does not pull
+    if (index % 7 == 2) dBodySetGyroscopicMode(b, 0);    // one without gyroscopic torque
+  }
+  return t;
+}
+
+TEST(LoneBodyStepper, EndsEveryStepBitForBitWhereQuickStepPutsTheBody) {
+  OdeLibrary ode;
+  OdeWorld kernel_world = MakeWorld(), ode_world = MakeWorld();
+  std::mt19937_64 rng(20261124);
+  std::vector<Twin> twins;
+  for (int i = 0; i < 40; ++i) twins.push_back(MakeTwin(kernel_world.get(), ode_world.get(), rng, i));
+  std::vector<std::array<dReal, 4>> start;
+  for (const Twin& t : twins) {
+    const dReal* q = dBodyGetQuaternion(t.kernel);
+    start.push_back({q[0], q[1], q[2], q[3]});
+  }
+
+  LoneBodyStepper stepper;
+  dVector3 gravity;
+  dWorldGetGravity(kernel_world.get(), gravity);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int step = 0; step < 400; ++step) {
+    for (const Twin& t : twins) {
+      // The pushes a drive adds before a step (none on some steps: the zero path too).
+      if (step % 3 == 0) continue;
+      const std::array<double, 6> push = {20 * u(rng), 20 * u(rng), 20 * u(rng), u(rng), u(rng), u(rng)};
+      for (dBodyID b : {t.kernel, t.ode}) {
+        dBodyAddForce(b, push[0], push[1], push[2]);
+        dBodyAddTorque(b, push[3], push[4], push[5]);
+      }
+    }
+    for (const Twin& t : twins) {
+      ASSERT_TRUE(IsLoneBody(t.kernel));
+      stepper.Step(t.kernel, gravity, kStep);
+    }
+    // QuickStep draws nothing from its generator for islands without constraints: the kernel
+    // skipping QuickStep leaves the generator as QuickStep would.
+    dRandSetSeed(7);
+    dWorldQuickStep(ode_world.get(), kStep);
+    ASSERT_EQ(dRandGetSeed(), 7UL);
+    for (std::size_t i = 0; i < twins.size(); ++i) {
+      ASSERT_EQ(StateDifference(twins[i].kernel, twins[i].ode), "") << "body " << i << ", step " << step;
+    }
+  }
+  // The comparison had something to compare: every body turned (and gravity or its pushes
+  // moved it).
+  for (std::size_t i = 0; i < twins.size(); ++i) {
+    const dReal* q = dBodyGetQuaternion(twins[i].kernel);
+    EXPECT_GT(std::abs(q[0] - start[i][0]) + std::abs(q[1] - start[i][1]) + std::abs(q[2] - start[i][2]), 0.01)
+        << "body " << i;
+  }
+}
+
+TEST(LoneBodyStepper, TellsTheGeometriesTheBodyMoved) {
+  OdeLibrary ode;
+  OdeWorld world = MakeWorld();
+  OdeSpace space(dSimpleSpaceCreate(nullptr));
+  dBodyID ball = dBodyCreate(world.get());
+  dMass mass;
+  dMassSetSphereTotal(&mass, 0.046, 0.0215);
+  dBodySetMass(ball, &mass);
+  dBodySetPosition(ball, 0, 0, 1);
+  dBodySetLinearVel(ball, 6.5, 0, 0);
+  dGeomID sphere = dCreateSphere(space.get(), 0.0215);
+  dGeomSetBody(sphere, ball);
+  dReal before[6];
+  dGeomGetAABB(sphere, before);  // computed now, and clean until the body moves
+
+  LoneBodyStepper stepper;
+  dVector3 gravity;
+  dWorldGetGravity(world.get(), gravity);
+  stepper.Step(ball, gravity, kStep);
+  dReal after[6];
+  dGeomGetAABB(sphere, after);
+  EXPECT_DOUBLE_EQ(after[0], dBodyGetPosition(ball)[0] - 0.0215);
+  EXPECT_GT(after[0] - before[0], 0.03) << "the bounding box moved with the ball";
+}
+
+TEST(IsLoneBody, LeavesToOdeWhatTheStepperDoesNotReproduce) {
+  OdeLibrary ode;
+  OdeWorld world = MakeWorld();
+  auto body = [&] {
+    dBodyID b = dBodyCreate(world.get());
+    dMass m;
+    dMassSetSphereTotal(&m, 1.0, 0.1);
+    dBodySetMass(b, &m);
+    return b;
+  };
+  EXPECT_TRUE(IsLoneBody(body()));
+
+  // Each case: what makes the body QuickStep's, set on a fresh body.
+  const std::vector<std::pair<const char*, std::function<void(dBodyID)>>> cases = {
+      {"a joint (a contact too)", [&](dBodyID b) { dJointAttach(dJointCreateBall(world.get(), nullptr), b, nullptr); }},
+      {"disabled (QuickStep does not step it)", [](dBodyID b) { dBodyDisable(b); }},
+      {"kinematic", [](dBodyID b) { dBodySetKinematic(b); }},
+      {"finite rotation", [](dBodyID b) { dBodySetFiniteRotationMode(b, 1); }},
+      {"linear damping", [](dBodyID b) { dBodySetLinearDamping(b, 0.01); }},
+      {"angular damping", [](dBodyID b) { dBodySetAngularDamping(b, 0.01); }},
+      {"a cap on the angular speed", [](dBodyID b) { dBodySetMaxAngularSpeed(b, 100); }},
+  };
+  for (const auto& [what, make] : cases) {
+    dBodyID b = body();
+    make(b);
+    EXPECT_FALSE(IsLoneBody(b)) << what;
+  }
+}
+
+}  // namespace
