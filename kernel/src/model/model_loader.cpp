@@ -14,6 +14,7 @@
 
 #include "model_internal.hpp"
 #include "robot_spec.hpp"
+#include "model/urdf.hpp"
 #include "ubersim/kernel/model.hpp"
 
 namespace ubersim::kernel {
@@ -88,6 +89,7 @@ RadioModel LoadRadio(const ParamView& world) {
 constexpr const char* kKinds[] = {"world", "field", "ball", "robot"};
 
 std::string Metres(double v) { return FormatNumber(v) + " m"; }
+std::string Kilograms(double v) { return FormatNumber(v) + " kg"; }
 
 /// The `kind:` of a model file's root; throws ModelError when it is missing or unknown.
 std::string KindOf(const ParamView& root) {
@@ -206,18 +208,21 @@ struct ModelLoader::Impl {
   }
 
   /// Checks a plugin's parameter block against the schema the plugin ships.
-  void CheckPlugin(PluginKind kind, const std::string& id, const ParamView& plugin_key,
-                   const ParamView& params) const {
-    if (!lookup) return;
+  /// `params` checked against plugin `id`'s schema, with the schema's defaults filled in (the
+  /// defaults in force are the ones the schema documents).
+  ParamView CheckPlugin(PluginKind kind, const std::string& id, const ParamView& plugin_key,
+                        const ParamView& params) const {
+    if (!lookup) return params;
     std::string schema;
     try {
       schema = lookup(kind, id);
     } catch (const std::exception& e) {
       throw ErrorAt(plugin_key, "unknown plugin '" + id + "': " + e.what());
     }
-    if (schema.empty()) return;  // the plugin declares no schema: nothing to check
-    ValidateAgainstSchema(params, schema,
-                          "the schema of " + std::string(ToString(kind)) + " plugin '" + id + "'");
+    if (schema.empty()) return params;  // the plugin declares no schema: nothing to check
+    const std::string label = "the schema of " + std::string(ToString(kind)) + " plugin '" + id + "'";
+    ValidateAgainstSchema(params, schema, label);
+    return WithSchemaDefaults(params, schema, label);
   }
 
   /// The component block `key` of a robot (drive, dribbler, kicker), if present.
@@ -228,8 +233,7 @@ struct ModelLoader::Impl {
     const ParamView plugin_key = block["plugin"];
     ComponentModel c;
     c.plugin = plugin_key.AsString();
-    c.params = ParamView(WithoutPlugin(block), block.Path());
-    CheckPlugin(kind, c.plugin, plugin_key, c.params);
+    c.params = CheckPlugin(kind, c.plugin, plugin_key, ParamView(WithoutPlugin(block), block.Path()));
     return c;
   }
 
@@ -367,6 +371,14 @@ struct ModelLoader::Impl {
         throw ErrorAt(v["urdf"], "cannot open URDF file " + urdf.string() + ": " + why);
       }
       r->urdf_file = urdf.lexically_normal().string();
+      // Read now, not only when a robot is built, so that `ubersim validate` refuses what
+      // `ubersim run` would: XML, links, masses, meshes, joints, and the root link's mass.
+      const UrdfRobot parsed = LoadUrdf(r->urdf_file);
+      const UrdfLink& root = parsed.links.front();
+      if (std::abs(root.mass.mass - r->body.mass) > 0.01 * r->body.mass) {
+        throw ErrorAt(body["mass"], "body.mass " + Kilograms(r->body.mass) + " differs from the URDF root link '" +
+                                        root.name + "' mass " + Kilograms(root.mass.mass) + " (" + parsed.file + ")");
+      }
     }
     r->source = v;
     r->surface = ReadSurface(v, "surface", "robot");
@@ -505,8 +517,7 @@ struct ModelLoader::Impl {
         const ParamView plugin_key = block["plugin"];
         TransportModel t;
         t.plugin = plugin_key.AsString();
-        t.params = ParamView(WithoutPlugin(block), block.Path());
-        CheckPlugin(PluginKind::kTransport, t.plugin, plugin_key, t.params);
+        t.params = CheckPlugin(PluginKind::kTransport, t.plugin, plugin_key, ParamView(WithoutPlugin(block), block.Path()));
         w.transports.push_back(std::move(t));
       }
     }

@@ -156,7 +156,71 @@ std::string Plural(std::size_t n, const char* word) {
   return std::to_string(n) + " " + word + (n == 1 ? "" : "s");
 }
 
+// The value a schema's `default` gives, located where the object it is put in was written.
+ParamNode DefaultNode(const rapidjson::Value& v, const ParamNode& where) {
+  ParamNode n;
+  n.file = where.file;
+  n.line = where.line;
+  n.column = where.column;
+  if (v.IsBool()) {
+    n.kind = Kind::kBool;
+    n.boolean = v.GetBool();
+  } else if (v.IsInt64()) {
+    n.kind = Kind::kInt;
+    n.integer = v.GetInt64();
+    n.number = static_cast<double>(n.integer);
+  } else if (v.IsNumber()) {
+    n.kind = Kind::kDouble;
+    n.number = v.GetDouble();
+  } else if (v.IsString()) {
+    n.kind = Kind::kString;
+    n.text = v.GetString();
+  } else if (v.IsArray()) {
+    n.kind = Kind::kArray;
+    for (const auto& item : v.GetArray()) n.items.push_back(DefaultNode(item, where));
+  } else if (v.IsObject()) {
+    n.kind = Kind::kObject;
+    for (const auto& m : v.GetObject()) n.members.push_back({m.name.GetString(), DefaultNode(m.value, where)});
+  }
+  return n;
+}
+
+void FillDefaults(ParamNode& node, const rapidjson::Value& schema) {
+  if (!schema.IsObject()) return;
+  if (node.kind == Kind::kArray) {
+    const auto items = schema.FindMember("items");
+    if (items == schema.MemberEnd()) return;
+    for (ParamNode& item : node.items) FillDefaults(item, items->value);
+    return;
+  }
+  const auto properties = schema.FindMember("properties");
+  if (node.kind != Kind::kObject || properties == schema.MemberEnd() || !properties->value.IsObject()) return;
+  for (const auto& p : properties->value.GetObject()) {
+    const std::string key = p.name.GetString();
+    const auto member = std::find_if(node.members.begin(), node.members.end(),
+                                     [&](const ParamNode::Member& m) { return m.key == key; });
+    if (member != node.members.end()) {
+      FillDefaults(member->value, p.value);
+    } else if (p.value.IsObject() && p.value.HasMember("default")) {
+      node.members.push_back({key, DefaultNode(p.value["default"], node)});
+    }
+  }
+}
+
 }  // namespace
+
+ParamView WithSchemaDefaults(const ParamView& value, const std::string& schema_json,
+                             const std::string& schema_label) {
+  rapidjson::Document schema_doc;
+  schema_doc.Parse(schema_json.c_str(), schema_json.size());
+  if (schema_doc.HasParseError()) {
+    throw ErrorAt(value, "the schema " + schema_label + " is not valid JSON: " +
+                             rapidjson::GetParseError_En(schema_doc.GetParseError()));
+  }
+  auto filled = std::make_shared<ParamNode>(value.Node());
+  FillDefaults(*filled, schema_doc);
+  return ParamView(std::move(filled), value.Path());
+}
 
 void ValidateAgainstSchema(const ParamView& value, const std::string& schema_json,
                            const std::string& schema_label) {

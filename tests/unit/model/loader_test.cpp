@@ -501,6 +501,34 @@ TEST_F(Loader, UnknownPlugin) {
          "unknown plugin 'omni': no dribbler plugin 'omni' in /opt/plugins, /usr/lib/ubersim/plugins");
 }
 
+// `ubersim validate` and `ubersim run` agree on a robot file: its URDF is read when the robot
+// file is loaded, not only when a robot is built from it.
+TEST_F(Loader, ARobotsUrdfIsReadWhenTheRobotFileIsLoaded) {
+  const std::string inertial =
+      "<inertial><mass value=\"2.3\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.01\"/></inertial>";
+  const auto robot = Write("r.yaml", Replace(kRobot, "name: test-omni\n", "name: test-omni\nurdf: r.urdf\n"));
+
+  // A link without a mass: the URDF's own error, at its line.
+  Write("r.urdf", "<robot name=\"r\">\n  <link name=\"base_link\"/>\n</robot>\n");
+  const ModelError no_mass = ErrorOf([&] { loader_.LoadRobot(robot); });
+  EXPECT_EQ(no_mass.file(), (dir() / "r.urdf").string()) << no_mass.what();
+  EXPECT_EQ(no_mass.line(), 2) << no_mass.what();
+  EXPECT_NE(no_mass.reason().find("positive mass"), std::string::npos) << no_mass.what();
+
+  // A root link heavier than body.mass: reported at body.mass in the robot file.
+  Write("r.urdf", "<robot name=\"r\">\n  <link name=\"base_link\">" + Replace(inertial, "2.3", "3.1") +
+                      "</link>\n</robot>\n");
+  const ModelError mass = ErrorOf([&] { loader_.LoadRobot(robot); });
+  EXPECT_EQ(mass.file(), robot.string()) << mass.what();
+  EXPECT_EQ(mass.line(), 4) << mass.what();
+  EXPECT_EQ(mass.key(), "body.mass") << mass.what();
+  EXPECT_NE(mass.reason().find("root link 'base_link' mass 3.1 kg"), std::string::npos) << mass.what();
+
+  // A good one loads.
+  Write("r.urdf", "<robot name=\"r\">\n  <link name=\"base_link\">" + inertial + "</link>\n</robot>\n");
+  EXPECT_EQ(loader_.LoadRobot(robot)->urdf_file, (dir() / "r.urdf").lexically_normal().string());
+}
+
 TEST_F(Loader, PluginThatFailsToLoad) {
   const ModelLoader broken(kSchemas, [](PluginKind, const std::string&) -> std::string {
     throw std::runtime_error(

@@ -132,3 +132,53 @@ TEST(Schema, ABrokenSchemaIsReported) {
 }
 
 }  // namespace
+
+namespace {
+
+using ubersim::kernel::WithSchemaDefaults;
+
+const char* const kDefaultsSchema = R"({
+  "type": "object",
+  "properties": {
+    "speed": {"type": "number", "default": 3.5},
+    "name": {"type": "string", "default": "omni"},
+    "on": {"type": "boolean", "default": true},
+    "count": {"type": "integer", "default": 4},
+    "order": {"type": "array", "default": [3, 2, 1, 0]},
+    "motor": {"type": "object", "properties": {"torque": {"type": "number", "default": 0.3},
+                                               "rate": {"type": "number", "default": 150}}},
+    "limits": {"type": "object", "properties": {"accel": {"type": "number", "default": 3}}},
+    "wheels": {"type": "array", "items": {"type": "object", "properties": {
+        "angle": {"type": "number"}, "radius": {"type": "number", "default": 0.029}}}}
+  }
+})";
+
+TEST(SchemaDefaults, KeysLeftOutGetTheSchemasDefaultAndWrittenOnesStay) {
+  const ParamView v(ParseYamlText("speed: 2\nmotor:\n  rate: 100\nwheels:\n  - {angle: 30}\n  - {angle: 150, radius: 0.03}\n",
+                                  "d.yaml"),
+                    "drive");
+  const ParamView d = WithSchemaDefaults(v, kDefaultsSchema, "test");
+  EXPECT_DOUBLE_EQ(d["speed"].AsDouble(), 2.0);  // written: stays
+  EXPECT_EQ(d["name"].AsString(), "omni");
+  EXPECT_TRUE(d["on"].AsBool());
+  EXPECT_EQ(d["count"].AsInt(), 4);
+  ASSERT_EQ(d["order"].Size(), 4u);
+  EXPECT_EQ(d["order"].At(0).AsInt(), 3);
+  EXPECT_DOUBLE_EQ(d["motor"]["torque"].AsDouble(), 0.3);  // inside an object that is there
+  EXPECT_DOUBLE_EQ(d["motor"]["rate"].AsDouble(), 100.0);
+  EXPECT_FALSE(d.Has("limits"));  // an object left out stays out: a plugin may ask Has()
+  EXPECT_DOUBLE_EQ(d["wheels"].At(0)["radius"].AsDouble(), 0.029);  // in every array item
+  EXPECT_DOUBLE_EQ(d["wheels"].At(1)["radius"].AsDouble(), 0.03);
+  // A filled value is located at the object it went into (errors about it point there).
+  EXPECT_EQ(d["motor"]["torque"].Node().file, "d.yaml");
+  EXPECT_EQ(d["motor"]["torque"].Node().line, d["motor"].Node().line);
+  EXPECT_EQ(d.Path(), "drive");
+  EXPECT_FALSE(v.Has("name")) << "the original tree is left as it was";
+}
+
+TEST(SchemaDefaults, ABrokenSchemaIsReported) {
+  const ParamView v(ParseYamlText("speed: 2\n", "d.yaml"));
+  EXPECT_THROW(WithSchemaDefaults(v, "{not json", "test"), ModelError);
+}
+
+}  // namespace

@@ -287,6 +287,12 @@ std::shared_ptr<const detail::ParamNode> ParseYamlText(const std::string& text, 
 /// naming its key path. `schema_label` names the schema in the message.
 void ValidateAgainstSchema(const ParamView& value, const std::string& schema_json,
                            const std::string& schema_label);
+/// `value` with every key its draft-04 JSON Schema gives a `default` and the value leaves out
+/// filled in, in objects that are there (nested objects and array items too): what the loader
+/// hands a plugin, so that the schema's defaults are the ones in force. Filled values carry the
+/// location of the object they were put in. Throws ModelError when the schema is not valid JSON.
+ParamView WithSchemaDefaults(const ParamView& value, const std::string& schema_json,
+                             const std::string& schema_label);
 
 /// Fills geometry.lines and geometry.arcs from the sizes, as SSL-Vision names them
 /// ("TopTouchLine", "LeftGoalLine", "CenterCircle", …).
