@@ -21,9 +21,9 @@ class PerceptionPipeline {
  public:
   PerceptionPipeline(PerceptionModel model, std::uint64_t seed);
 
-  /// True when a camera is due to capture at `now_ns` (so the caller builds a snapshot only then).
+  /// True when a camera is due to capture at `now_ns` (so the caller takes the ground truth only then).
   bool CaptureDue(std::int64_t now_ns) const;
-  /// Captures one frame for every camera due at the snapshot's time.
+  /// Captures one frame for every camera due at the ground truth's time.
   void Capture(const WorldSnapshot& truth);
   /// Frames whose send time has come (t_sent <= now), oldest first.
   std::vector<VisionFrame> Release(std::int64_t now_ns);

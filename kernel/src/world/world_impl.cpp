@@ -167,8 +167,8 @@ WorldImpl::WorldImpl(const WorldModel& model, PluginRegistry& registry, Log& log
 
 void WorldImpl::PublishGroundTruth() {
   if (transports_.empty()) return;
-  const WorldSnapshot snapshot = GroundTruth();
-  for (auto& t : transports_) t->Guarded("Publish", [&](Transport& tr) { tr.Publish(snapshot); });
+  const WorldSnapshot truth = GroundTruth();
+  for (auto& t : transports_) t->Guarded("Publish", [&](Transport& tr) { tr.Publish(truth); });
 }
 
 WorldImpl::~WorldImpl() {
@@ -804,12 +804,12 @@ void WorldImpl::Step() {
     last_good_.CaptureIfFinite();
   }
 
-  // One snapshot serves the cameras and the transports, and is taken only when one needs it.
-  std::optional<WorldSnapshot> snapshot;
+  // One ground truth serves the cameras and the transports, and is taken only when one needs it.
+  std::optional<WorldSnapshot> truth;
   t0 = SteadyClock::now();
   if (perception_.CaptureDue(sim_time_ns_)) {
-    snapshot = GroundTruth();
-    perception_.Capture(*snapshot);
+    truth = GroundTruth();
+    perception_.Capture(*truth);
   }
   const std::vector<VisionFrame> frames = perception_.Release(sim_time_ns_);
   timings_.perception_ns += ElapsedNs(t0);
@@ -820,9 +820,9 @@ void WorldImpl::Step() {
     for (auto& t : transports_) t->Guarded("OnVisionFrame", [&](Transport& tr) { tr.OnVisionFrame(f); });
   }
   if (!transports_.empty()) {
-    if (!snapshot) snapshot = GroundTruth();
+    if (!truth) truth = GroundTruth();
     for (auto& t : transports_) {
-      t->Guarded("Publish", [&](Transport& tr) { tr.Publish(*snapshot); });
+      t->Guarded("Publish", [&](Transport& tr) { tr.Publish(*truth); });
     }
   }
   timings_.transports_ns += ElapsedNs(t0);

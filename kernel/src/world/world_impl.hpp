@@ -162,9 +162,9 @@ class WorldImpl {
   Log& log_;
   bool start_transports_;
   OdeLibrary ode_;
-  // Declaration order is teardown order reversed: transports stop first, robots (and their
-  // plugin libraries' objects) go before the scene, the scene before the collision space, and
-  // everything before the ODE world.
+  // The destructor tears down in this order: transports stop (their threads may still post
+  // events), then the robots (and their plugin libraries' objects), the collision manager, the
+  // scene graph, and the ODE world last.
   OdeWorld world_;
   std::unique_ptr<SceneGraph> scene_;
   std::unique_ptr<CollisionManager> collision_;
@@ -183,8 +183,8 @@ class WorldImpl {
   std::map<std::pair<int, int>, std::pair<std::shared_ptr<const RobotModel>, std::shared_ptr<const RobotModel>>>
       spec_models_;
   std::unique_ptr<ModelLoader> loader_;
-  std::uint64_t roster_version_ = 0;
-  std::shared_ptr<const FieldModel> initial_field_;  // the world file's (a reset goes back to it)  // counts robots coming, going and rebuilt
+  std::uint64_t roster_version_ = 0;  // counts robots coming, going and rebuilt
+  std::shared_ptr<const FieldModel> initial_field_;  // the world file's (a reset goes back to it)
   NodeImpl* team_nodes_[2] = {nullptr, nullptr};  // blue, yellow
   std::vector<std::unique_ptr<TransportHost>> transports_;
   FieldGeometry field_geometry_;

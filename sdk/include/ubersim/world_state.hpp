@@ -55,7 +55,9 @@ struct FieldGeometry {
   std::vector<FieldArc> arcs;       ///< markings
 };
 
-/// Everything a transport may publish after a step: ground truth and time.
+/// Everything a transport may publish after a step: the ground truth and time (the kernel calls
+/// it the ground truth, World::GroundTruth; the type keeps its name until the next ABI bump, and
+/// "snapshot" elsewhere means a saved-state file).
 struct WorldSnapshot {
   std::int64_t step = 0;            ///< physics steps since start
   std::int64_t sim_time_ns = 0;     ///< simulated time, ns
