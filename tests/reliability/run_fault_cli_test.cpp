@@ -125,6 +125,21 @@ TEST_F(RunFault, AFaultWhileBuildingUnderStopStopsBeforeTheFirstStep) {
   EXPECT_NE(text.find("Configure threw std::out_of_range: wheel index 4 of 4"), std::string::npos) << text;
 }
 
+// One exception-to-exit-code map for every command (apps/cli/exit_codes.cpp, docs/cli.md): a
+// plugin refusing its parameters is a plugin error, 4, under run, bench and soak alike.
+TEST_F(RunFault, APluginRefusingItsParametersExitsFourUnderEveryCommand) {
+  const fs::path world = FaultyWorld("configure_refuses", "stop");
+  const std::string commands[] = {Run(world, "--duration 0.1 --local-only"),
+                                  "bench " + world.string() + " --duration 0.05 --no-baseline",
+                                  "soak " + world.string() + " --duration 1 --quiet"};
+  for (const std::string& command : commands) {
+    const Result r = RunUbersim(command);
+    EXPECT_EQ(r.exit_code, 4) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find("plugin error: "), std::string::npos) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find("gain must be positive (a parameter refused)"), std::string::npos) << command << "\n" << r.output;
+  }
+}
+
 TEST_F(RunFault, SnapshotOutThenRestoreContinuesBitForBit) {
   const fs::path world = FaultyWorld("none", "stop");
   const fs::path straight = dir_ / "straight.snapshot", half = dir_ / "half.snapshot", resumed = dir_ / "resumed.snapshot";

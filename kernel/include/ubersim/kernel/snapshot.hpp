@@ -108,7 +108,7 @@ struct SavedState {
   std::vector<SavedJoint> joints;     ///< every joint, scene-graph order
   std::vector<bool> geom_collides;    ///< every geometry, scene-graph order
   /// Bodies (indices into `bodies`) in the order ODE last moved them within its collision space;
-  /// the space's pair order follows it (see ode_state.hpp).
+  /// the space's pair order follows it (kernel/src/state/ode_state.hpp).
   std::vector<std::uint32_t> moved_bodies;
 
   // Robots, sensors, radio, faults.

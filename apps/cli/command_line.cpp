@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "command_line.hpp"
+
+#include <iostream>
+
+#include "exit_codes.hpp"
+
+namespace ubersim::cli {
+
+namespace po = boost::program_options;
+
+std::optional<int> ParseCommandLine(const std::vector<std::string>& args, const char* command,
+                                    const po::options_description& desc, po::variables_map& vm,
+                                    const po::options_description* hidden,
+                                    const po::positional_options_description* positional) {
+  po::options_description all;
+  all.add(desc);
+  if (hidden) all.add(*hidden);
+  try {
+    po::command_line_parser parser(args);
+    parser.options(all);
+    if (positional) parser.positional(*positional);
+    po::store(parser.run(), vm);
+    po::notify(vm);
+  } catch (const std::exception& e) {
+    std::cerr << "ubersim " << command << ": " << e.what() << "\n\n" << desc << "\n";
+    return kExitUsage;
+  }
+  if (vm.count("help")) {
+    std::cout << desc << "\n";
+    return kExitOk;
+  }
+  return std::nullopt;
+}
+
+std::string CommandLineText(const std::string& command, const std::vector<std::string>& args) {
+  std::string text = "ubersim " + command;
+  for (const std::string& a : args) text += " " + a;
+  return text;
+}
+
+void PhysicsFlags::AddTo(po::options_description& desc) {
+  desc.add_options()
+      ("physics-step", po::value<double>(&step), "instead of the world files' physics step, s")
+      ("solver-iterations", po::value<int>(&iterations), "instead of the world files' QuickStep iterations")
+      ("solver-iterations-without-ball", po::value<int>(&iterations_without_ball),
+       "QuickStep iterations of the islands no ball belongs to (default: --solver-iterations)")
+      ("max-contacts", po::value<int>(&contacts), "instead of the world files' contacts per geometry pair");
+}
+
+bool PhysicsFlags::Read(const po::variables_map& vm, const std::string& command, kernel::PhysicsOverrides& out) const {
+  if ((vm.count("physics-step") && !(step > 0 && step <= 0.02)) || (vm.count("solver-iterations") && iterations < 1) ||
+      (vm.count("solver-iterations-without-ball") && iterations_without_ball < 1) ||
+      (vm.count("max-contacts") && (contacts < 1 || contacts > 16))) {
+    std::cerr << "ubersim " << command
+              << ": 0 < --physics-step <= 0.02, --solver-iterations >= 1, --solver-iterations-without-ball >= 1, "
+                 "--max-contacts 1..16\n";
+    return false;
+  }
+  if (vm.count("physics-step")) out.step = step;
+  if (vm.count("solver-iterations")) out.solver_iterations = iterations;
+  if (vm.count("solver-iterations-without-ball")) out.solver_iterations_without_ball = iterations_without_ball;
+  if (vm.count("max-contacts")) out.max_contacts = contacts;
+  return true;
+}
+
+}  // namespace ubersim::cli

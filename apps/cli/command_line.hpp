@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: Apache-2.0
+// What the commands share in reading their command lines: parsing against their options (with
+// --help and usage errors handled alike) and the physics flags several of them take.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <boost/program_options.hpp>
+
+#include "ubersim/kernel/model.hpp"
+
+namespace ubersim::cli {
+
+/// Parses a command's `args` against `desc`, plus `hidden` and `positional` for its positional
+/// arguments. Returns the exit code when the command ends here (a usage error: the message and
+/// the options; --help: the options), nothing when it goes on.
+std::optional<int> ParseCommandLine(const std::vector<std::string>& args, const char* command,
+                                    const boost::program_options::options_description& desc,
+                                    boost::program_options::variables_map& vm,
+                                    const boost::program_options::options_description* hidden = nullptr,
+                                    const boost::program_options::positional_options_description* positional = nullptr);
+
+/// "ubersim COMMAND ARGS…": the command line as typed, for reports.
+std::string CommandLineText(const std::string& command, const std::vector<std::string>& args);
+
+/// --physics-step, --solver-iterations, --solver-iterations-without-ball, --max-contacts: one
+/// meaning and one check for every command that tries other physics settings than the world files'.
+struct PhysicsFlags {
+  double step = 0;                  ///< --physics-step
+  int iterations = 0;               ///< --solver-iterations
+  int iterations_without_ball = 0;  ///< --solver-iterations-without-ball
+  int contacts = 0;                 ///< --max-contacts
+
+  /// Adds the four flags to `desc`.
+  void AddTo(boost::program_options::options_description& desc);
+  /// The settings given; false (with the reason on stderr) when one is out of range.
+  bool Read(const boost::program_options::variables_map& vm, const std::string& command,
+            kernel::PhysicsOverrides& out) const;
+};
+
+}  // namespace ubersim::cli
