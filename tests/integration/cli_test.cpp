@@ -4,6 +4,7 @@
 #include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -63,6 +64,35 @@ TEST(Cli, ValidateReportsFileLineColumnAndKey) {
   EXPECT_EQ(r.exit_code, 3) << r.output;
   EXPECT_NE(r.output.find(ball.string() + ":4:1"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("masss"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+// `validate` and `run` agree on a robot file: a URDF that `run` would refuse (a link without a
+// mass) makes `validate` refuse the robot file, and the world naming it, at the URDF's line.
+TEST(Cli, ValidateAndRunRefuseTheSameBrokenUrdf) {
+  const fs::path dir = TempDir() / "urdf";
+  fs::create_directories(dir);
+  std::ofstream(dir / "bad.urdf") << "<robot name=\"bad\">\n  <link name=\"base_link\"/>\n</robot>\n";
+  std::string robot_text;
+  {
+    std::ifstream in(kModels + "/robots/ssl-omni-2026-urdf.yaml");
+    robot_text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string from = "urdf: urdf/ssl-omni-2026.urdf";
+  ASSERT_NE(robot_text.find(from), std::string::npos);
+  robot_text.replace(robot_text.find(from), from.size(), "urdf: bad.urdf");
+  std::ofstream(dir / "robot.yaml") << robot_text;
+  const fs::path world = dir / "world.yaml";
+  std::ofstream(world) << "kind: world\nname: w\nfield: " << kModels << "/fields/div-b.yaml\nball: " << kModels
+                       << "/balls/golf.yaml\nrobots:\n  - {team: blue, id: 0, model: robot.yaml, x: 0, y: 0}\n";
+  const std::string where = (dir / "bad.urdf").string() + ":2:";
+  for (const std::string command : {"validate " + (dir / "robot.yaml").string(), "validate " + world.string(),
+                                    "run " + world.string() + " --fast --duration 0.1 --local-only"}) {
+    const Result r = RunUbersim(command);
+    EXPECT_EQ(r.exit_code, 3) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find(where), std::string::npos) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find("positive mass"), std::string::npos) << command << "\n" << r.output;
+  }
   fs::remove_all(dir);
 }
 
