@@ -105,44 +105,24 @@ TEST(PluginFault, PolicyNamesAreParsedAndUnknownOnesRefused) {
   EXPECT_THROW(World(TwoRobots("none", "ignore"), f.registry, f.log, false), std::invalid_argument);
 }
 
-TEST(PluginFault, ConfigureThrowingUnderDisableBuildsTheRobotWithoutThePart) {
-  Fixture f;
-  World world(TwoRobots("configure_throws", "disable"), f.registry, f.log, false);
-  EXPECT_FALSE(world.stopped());
-  ASSERT_EQ(world.faults().size(), 1u);
-  const PluginFault& fault = world.faults()[0];
-  ExpectNamed(fault, "Configure");
-  EXPECT_EQ(fault.what, "threw std::out_of_range: wheel index 4 of 4");
-  EXPECT_EQ(fault.step, 0);
-  // What it built before it threw stays, its motor stopped; the other robot's wheel turns.
-  EXPECT_EQ(WheelMotorSpeed(world, 0), 0.0);
-  EXPECT_EQ(WheelMotorSpeed(world, 1), 10.0);
-  // The robot takes no commands for its drive; the world steps on.
-  DriveBoth(world);
-  for (int i = 0; i < 500; ++i) world.Step();
-  EXPECT_EQ(world.clock().steps(), 500);
-  EXPECT_LT(SpeedOf(world, 0), 0.01);
-  EXPECT_NEAR(SpeedOf(world, 1), 1.0, 0.05);
-  EXPECT_EQ(world.event_counters().rejected, 1);
-  const std::string log = f.text.str();
-  EXPECT_NE(log.find("its drive is switched off after a fault"), std::string::npos) << log;
-  EXPECT_NE(log.find("plugin fault at step 0: robot blue 0 drive 'faulty_drive' (" + kDriveFile +
-                     "): Configure threw std::out_of_range: wheel index 4 of 4; this drive is switched off; "
-                     "the world carries on without it (on_plugin_fault: disable)"),
-            std::string::npos)
-      << log;
-}
-
-TEST(PluginFault, ConfigureThrowingUnderStopLeavesABuiltWorldThatTakesNoStep) {
-  Fixture f;
-  World world(TwoRobots("configure_throws", "stop"), f.registry, f.log, false);
-  EXPECT_TRUE(world.stopped());
-  world.Step();
-  EXPECT_EQ(world.clock().steps(), 0);
-  // Its state can still be saved (what ubersim run writes beside the report).
-  const SavedState s = world.Save();
-  ASSERT_EQ(s.faults.size(), 1u);
-  EXPECT_TRUE(s.robots[0].parts[0].failed);
+// Any exception from Configure is a load error naming the robot, its model file, the plugin, its
+// library and the reason, under either policy: the world is not built (the CLI exits 4), never a
+// fault of a running world with a crash report.
+TEST(PluginFault, ConfigureThrowingIsALoadErrorWhateverThePolicy) {
+  for (const char* policy : {"stop", "disable"}) {
+    Fixture f;
+    try {
+      World world(TwoRobots("configure_throws", policy), f.registry, f.log, false);
+      ADD_FAILURE() << "built under " << policy;
+    } catch (const PluginError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("blue/0 ("), std::string::npos) << what;
+      EXPECT_NE(what.find("): drive plugin 'faulty_drive' (" + kDriveFile +
+                          ") failed to configure: std::out_of_range: wheel index 4 of 4"),
+                std::string::npos)
+          << what;
+    }
+  }
 }
 
 TEST(PluginFault, APluginRefusingItsParametersIsAModelErrorWhateverThePolicy) {
@@ -152,7 +132,8 @@ TEST(PluginFault, APluginRefusingItsParametersIsAModelErrorWhateverThePolicy) {
       World world(TwoRobots("configure_refuses", policy), f.registry, f.log, false);
       ADD_FAILURE() << "built";
     } catch (const PluginError& e) {
-      EXPECT_NE(std::string(e.what()).find("drive plugin 'faulty_drive' failed to configure: gain must be positive"),
+      EXPECT_NE(std::string(e.what()).find("drive plugin 'faulty_drive' (" + kDriveFile +
+                                           ") failed to configure: gain must be positive"),
                 std::string::npos)
           << e.what();
     }

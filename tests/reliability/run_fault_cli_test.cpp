@@ -117,12 +117,20 @@ TEST_F(RunFault, AFaultUnderDisableIsLoggedAndTheRunCarriesOn) {
   EXPECT_NE(nan.output.find("stopped at sim time 0.5 s after 500 steps"), std::string::npos) << nan.output;
 }
 
-TEST_F(RunFault, AFaultWhileBuildingUnderStopStopsBeforeTheFirstStep) {
-  const Result r = RunUbersim(Run(FaultyWorld("configure_throws", "stop"), "--duration 1"));
-  ASSERT_EQ(r.exit_code, 7) << r.output;
-  const std::string text = Read(CrashFiles().first);
-  EXPECT_NE(text.find("stopped: before the first step (a fault while building)"), std::string::npos) << text;
-  EXPECT_NE(text.find("Configure threw std::out_of_range: wheel index 4 of 4"), std::string::npos) << text;
+// A Configure that throws is a load error, not a fault: exit 4 naming the model file, the plugin
+// and the reason, and no crash report (there is no running world to resume).
+TEST_F(RunFault, AConfigureThatThrowsIsALoadErrorWithoutACrashReport) {
+  const Result r = RunUbersim(Run(FaultyWorld("configure_throws", "stop"), "--duration 1 --local-only"));
+  ASSERT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("plugin error: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find((dir_ / "faulty.yaml").string() + "): drive plugin 'faulty_drive'"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("failed to configure: std::out_of_range: wheel index 4 of 4"), std::string::npos) << r.output;
+  EXPECT_EQ(CrashFiles().first, fs::path()) << "a crash report was written";
+  // ubersim validate builds the world too, and refuses it the same way.
+  const Result v = RunUbersim("validate " + (dir_ / "world.yaml").string());
+  EXPECT_EQ(v.exit_code, 4) << v.output;
+  EXPECT_NE(v.output.find("failed to configure: std::out_of_range: wheel index 4 of 4"), std::string::npos) << v.output;
 }
 
 // One exception-to-exit-code map for every command (apps/cli/exit_codes.cpp, docs/cli.md): a

@@ -157,29 +157,29 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
     CollectJoints(*node_, before);
     Part& p = *part;
     parts_.push_back(std::move(part));
-    // PluginError and ParamError are the plugin refusing its parameters: the model file is
-    // wrong, and the world is not built. Anything else is a fault of the plugin.
-    std::string fault;
+    // Any exception from Configure means the robot cannot be built as its model file says: a
+    // load error naming the robot, its model file, the plugin, its library and the reason (exit 4
+    // from the CLI; `ubersim validate` runs Configure too), never a fault of a running world.
+    const auto refused = [&](const std::string& why) {
+      return PluginError(node_->Path() + " (" + m.file + "): " + ToString(kind) + " plugin '" + cm->plugin +
+                         "' (" + p.file + ") failed to configure: " + why);
+    };
     try {
       p.component->Configure(*p.context);
     } catch (const PluginError& e) {
-      throw PluginError(node_->Path() + " (" + m.file + "): " + ToString(kind) + " plugin '" + cm->plugin +
-                        "' failed to configure: " + e.what());
+      throw refused(e.what());
     } catch (const ParamError& e) {
-      throw PluginError(node_->Path() + " (" + m.file + "): " + ToString(kind) + " plugin '" + cm->plugin +
-                        "' failed to configure: " + e.what());
+      throw refused(e.what());
     } catch (const std::exception& e) {
-      fault = "threw " + ExceptionText(e);
+      throw refused(ExceptionText(e));
     } catch (...) {
-      fault = kNotStd;
+      throw refused(kNotStd);
     }
     std::vector<const JointImpl*> after;
     CollectJoints(*node_, after);
     for (const JointImpl* j : after) {
       if (std::find(before.begin(), before.end(), j) == before.end()) p.joints.push_back(j);
     }
-    // What it built before it threw stays, inert: its motors stopped, its handlers silenced.
-    if (!fault.empty()) Fail(p, "Configure", fault);
   };
   add(m.drive, PluginKind::kDrive);
   add(m.dribbler, PluginKind::kDribbler);
