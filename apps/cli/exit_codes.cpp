@@ -27,6 +27,8 @@ Mapped Map(std::exception_ptr error) {
     return {kExitUsage, "", e.what()};
   } catch (const kernel::OverrideError& e) {  // run: a flag that does not fit the world
     return {kExitUsage, "", e.what()};
+  } catch (const kernel::PluginLookupError& e) {  // a model file names a plugin not found or refused
+    return {kExitPlugin, "plugin error: ", e.what()};
   } catch (const kernel::ModelError& e) {
     return {kExitModel, "invalid model: ", e.what()};
   } catch (const ParamError& e) {  // a model file's parameter missing or of the wrong type

@@ -224,6 +224,7 @@ int RunCommand(const std::vector<std::string>& args) {
   WorldModel& model = loaded.model;
   ApplyFlags(f, vm, model, loaded.loading);
   World world(model, *loaded.loading.registry, log);
+  for (const std::string& skipped : loaded.loading.registry->Skipped()) log.Warning("plugin library " + skipped);
   if (!f.restore_file.empty()) {
     world.Restore(ReadSnapshotFile(f.restore_file));
     std::cerr << "ubersim: restored " << f.restore_file << ": step " << world.clock().steps() << ", sim time "

@@ -16,6 +16,7 @@
 #include "robot_spec.hpp"
 #include "model/urdf.hpp"
 #include "ubersim/kernel/model.hpp"
+#include "ubersim/kernel/plugin_registry.hpp"
 
 namespace ubersim::kernel {
 namespace {
@@ -217,7 +218,12 @@ struct ModelLoader::Impl {
     try {
       schema = lookup(kind, id);
     } catch (const std::exception& e) {
-      throw ErrorAt(plugin_key, "unknown plugin '" + id + "': " + e.what());
+      // Refused is not unknown: a team with a stale library must read why it was refused.
+      const auto* load = dynamic_cast<const PluginLoadError*>(&e);
+      const std::string what = load && !load->not_found() ? "plugin '" + id + "' is refused: " + load->reason()
+                                                          : "unknown plugin '" + id + "': " + e.what();
+      const ModelError located = ErrorAt(plugin_key, what);
+      throw PluginLookupError(located.file(), located.line(), located.column(), located.key(), located.reason());
     }
     if (schema.empty()) return params;  // the plugin declares no schema: nothing to check
     const std::string label = "the schema of " + std::string(ToString(kind)) + " plugin '" + id + "'";

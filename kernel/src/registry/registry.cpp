@@ -18,8 +18,11 @@
 namespace ubersim::kernel {
 namespace fs = std::filesystem;
 
-PluginLoadError::PluginLoadError(std::string where, std::string reason)
-    : std::runtime_error(where + ": " + reason), where_(std::move(where)), reason_(std::move(reason)) {}
+PluginLoadError::PluginLoadError(std::string where, std::string reason, bool not_found)
+    : std::runtime_error(where + ": " + reason),
+      where_(std::move(where)),
+      reason_(std::move(reason)),
+      not_found_(not_found) {}
 
 /// A loaded (or in-process) plugin: its descriptor, and the library that must outlive instances.
 struct PluginRegistry::Entry {
@@ -229,6 +232,16 @@ PluginRegistry::ScanResult PluginRegistry::Scan() {
     for (const fs::path& f : files) {
       try {
         const PluginInfo& info = LoadFile(f);
+        // Find looks plugins up by file name: a file named for another id is not what a world
+        // naming either id would use, so it is listed as a problem, not as a plugin.
+        const std::string name = f.filename().string();
+        const std::string named_for = name.substr(std::string(kLibraryPrefix).size(),
+                                                  name.size() - std::string(kLibraryPrefix).size() - 3);
+        if (named_for != info.id) {
+          result.problems.push_back(f.string() + ": file is named for '" + named_for + "' but its descriptor says '" +
+                                    info.id + "' (a world naming either would not get it)");
+          continue;
+        }
         if (listed.insert(info.id).second) result.plugins.push_back(info);
       } catch (const PluginLoadError& e) {
         result.problems.push_back(e.what());
@@ -250,16 +263,26 @@ const PluginInfo& PluginRegistry::Find(PluginKind kind, const std::string& id) {
 
   const std::string file_name = kLibraryPrefix + id + kLibrarySuffix;
   std::string searched;
+  std::vector<std::string> refused;  // files of that name that could not be used, and why
   for (const fs::path& dir : search_paths_) {
     const fs::path candidate = dir / file_name;
     std::error_code ec;
     if (fs::exists(candidate, ec)) {
-      const PluginInfo& info = LoadFile(candidate);  // refusals say why, naming the file
-      if (info.id != id) {
-        throw PluginLoadError(candidate.string(), "file is named for '" + id +
-                                                      "' but its descriptor says '" + info.id + "'");
+      const PluginInfo* info = nullptr;
+      try {
+        info = &LoadFile(candidate);
+        if (info->id != id) {
+          throw PluginLoadError(candidate.string(), "file is named for '" + id + "' but its descriptor says '" +
+                                                        info->id + "'");
+        }
+      } catch (const PluginLoadError& e) {
+        refused.push_back(e.what());  // keep looking: a stale library must not hide a good one
+        continue;
       }
-      return check_kind(info);
+      // The id is taken now: another kind under that id is an error of the model, not the file.
+      const PluginInfo& good = check_kind(*info);
+      for (const std::string& r : refused) skipped_.push_back(r + " (skipped: using " + good.file.string() + ")");
+      return good;
     }
     std::string found;
     for (const auto& entry : fs::directory_iterator(dir, ec)) {
@@ -273,9 +296,16 @@ const PluginInfo& PluginRegistry::Find(PluginKind kind, const std::string& id) {
     searched += (searched.empty() ? "" : "; ") + dir.string() +
                 (found.empty() ? " (nothing)" : " (found: " + found + ")");
   }
+  if (!refused.empty()) {
+    std::string reasons;
+    for (const std::string& r : refused) reasons += (reasons.empty() ? "" : "; ") + r;
+    throw PluginLoadError("plugin '" + id + "' (" + ToString(kind) + ")",
+                          "refused: " + reasons + (searched.empty() ? "" : "; no other found in " + searched));
+  }
   throw PluginLoadError("plugin '" + id + "' (" + ToString(kind) + ")",
                         "not found; searched " + (searched.empty() ? std::string("no folders") : searched) +
-                            "; set UBERSIM_PLUGIN_PATH or plugin_paths in the world file");
+                            "; set UBERSIM_PLUGIN_PATH or plugin_paths in the world file",
+                        /*not_found=*/true);
 }
 
 std::shared_ptr<void> PluginRegistry::Create(PluginKind kind, const std::string& id) {

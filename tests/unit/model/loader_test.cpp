@@ -9,6 +9,7 @@
 
 #include "test_files.hpp"
 #include "ubersim/kernel/model.hpp"
+#include "ubersim/kernel/plugin_registry.hpp"
 
 namespace {
 
@@ -16,6 +17,8 @@ namespace fs = std::filesystem;
 using ubersim::PluginKind;
 using ubersim::kernel::ModelError;
 using ubersim::kernel::ModelLoader;
+using ubersim::kernel::PluginLoadError;
+using ubersim::kernel::PluginLookupError;
 using ubersim::kernel::PluginSchemaLookup;
 using ubersim::kernel::WorldModel;
 
@@ -527,6 +530,25 @@ TEST_F(Loader, ARobotsUrdfIsReadWhenTheRobotFileIsLoaded) {
   // A good one loads.
   Write("r.urdf", "<robot name=\"r\">\n  <link name=\"base_link\">" + inertial + "</link>\n</robot>\n");
   EXPECT_EQ(loader_.LoadRobot(robot)->urdf_file, (dir() / "r.urdf").lexically_normal().string());
+}
+
+// A plugin found and refused is not "unknown": the loader says it is refused and why, located at
+// the plugin key, as a PluginLookupError (the CLI's plugin error, exit 4).
+TEST_F(Loader, ARefusedPluginIsCalledRefusedNotUnknown) {
+  const ModelLoader refusing(kSchemas, [](PluginKind, const std::string&) -> std::string {
+    throw PluginLoadError("plugin 'omni' (drive)", "refused: /opt/plugins/libubersim_omni.so: built for plugin ABI 6");
+  });
+  const auto path = Write("r.yaml", kRobot);
+  try {
+    refusing.LoadRobot(path);
+    ADD_FAILURE() << "loaded";
+  } catch (const PluginLookupError& e) {
+    Expect(e, path, 5, 3, "drive.plugin",
+           "plugin 'omni' is refused: refused: /opt/plugins/libubersim_omni.so: built for plugin ABI 6");
+  }
+  // Not found stays "unknown plugin", and is a PluginLookupError too.
+  const auto unknown = Write("u.yaml", Replace(kRobot, "  plugin: omni\n", "  plugin: warp\n"));
+  EXPECT_THROW(loader_.LoadRobot(unknown), PluginLookupError);
 }
 
 TEST_F(Loader, PluginThatFailsToLoad) {

@@ -3,6 +3,8 @@
 // file, a file that is no library, a library that is no plugin, another plugin ABI, a newer SDK,
 // a misnamed file and a throwing constructor are each refused with the file and the reason, and
 // the registry (and a world built with it) carries on.
+#include <unistd.h>
+
 #include <filesystem>
 #include <memory>
 #include <sstream>
@@ -102,7 +104,45 @@ TEST(PluginRegistry, AThrowingConstructorIsRefusedWithItsMessage) {
 TEST(PluginRegistry, AFileWhoseDescriptorNamesAnotherIdIsRefused) {
   PluginRegistry registry({UBERSIM_FAKE_PLUGIN_DIR});
   const PluginLoadError e = Refusal([&] { registry.Find(PluginKind::kKicker, "fake_misnamed"); });
-  EXPECT_EQ(e.reason(), "file is named for 'fake_misnamed' but its descriptor says 'fake_renamed'");
+  EXPECT_FALSE(e.not_found());
+  EXPECT_EQ(e.reason().rfind("refused: ", 0), 0u) << e.reason();
+  EXPECT_NE(e.reason().find("libubersim_fake_misnamed.so: file is named for 'fake_misnamed' but its descriptor "
+                            "says 'fake_renamed'"),
+            std::string::npos)
+      << e.reason();
+}
+
+// A refused library earlier in the search path (a stale build, another ABI, not a library at all)
+// does not hide a good one later: the good one is used and the stale one is said to be skipped;
+// with no good one, the error says "refused" and why, never "not found".
+TEST(PluginRegistry, ARefusedLibraryEarlierInThePathDoesNotHideAGoodOneLater) {
+  const fs::path stale = fs::temp_directory_path() / ("ubersim_stale_plugins_" + std::to_string(::getpid()));
+  fs::create_directories(stale);
+  fs::copy_file(Fake("fake_other_abi"), stale / "libubersim_fake_good.so", fs::copy_options::overwrite_existing);
+  {
+    PluginRegistry registry({stale, UBERSIM_FAKE_PLUGIN_DIR});
+    const PluginInfo& info = registry.Find(PluginKind::kDrive, "fake_good");
+    EXPECT_EQ(info.file, fs::canonical(Fake("fake_good")));
+    ASSERT_EQ(registry.Skipped().size(), 1u);
+    EXPECT_NE(registry.Skipped()[0].find((stale / "libubersim_fake_good.so").string() + ": built for"), std::string::npos)
+        << registry.Skipped()[0];
+    EXPECT_NE(registry.Skipped()[0].find("skipped: using " + fs::canonical(Fake("fake_good")).string()),
+              std::string::npos)
+        << registry.Skipped()[0];
+    // A scan lists the file a lookup uses, and the stale one among the refused.
+    const PluginRegistry::ScanResult scan = registry.Scan();
+    bool listed = false;
+    for (const PluginInfo& p : scan.plugins) listed = listed || (p.id == "fake_good" && p.file == info.file);
+    EXPECT_TRUE(listed);
+  }
+  {
+    PluginRegistry registry({stale});
+    const PluginLoadError e = Refusal([&] { registry.Find(PluginKind::kDrive, "fake_good"); });
+    EXPECT_FALSE(e.not_found());
+    EXPECT_EQ(e.reason().rfind("refused: " + (stale / "libubersim_fake_good.so").string() + ": built for", 0), 0u)
+        << e.reason();
+  }
+  fs::remove_all(stale);
 }
 
 TEST(PluginRegistry, AskingForTheWrongKindOrAnUnknownIdSaysWhatWasFound) {
@@ -111,6 +151,7 @@ TEST(PluginRegistry, AskingForTheWrongKindOrAnUnknownIdSaysWhatWasFound) {
   EXPECT_EQ(kind.reason(), "'fake_good' is a drive plugin, not a kicker");
   const PluginLoadError unknown = Refusal([&] { registry.Find(PluginKind::kDrive, "warp_drive"); });
   EXPECT_EQ(unknown.where(), "plugin 'warp_drive' (drive)");
+  EXPECT_TRUE(unknown.not_found());
   EXPECT_NE(unknown.reason().find(fs::canonical(UBERSIM_FAKE_PLUGIN_DIR).string() + " (found: "),
             std::string::npos) << unknown.reason();
   EXPECT_NE(unknown.reason().find("fake_good"), std::string::npos) << unknown.reason();
@@ -139,10 +180,11 @@ TEST(PluginRegistry, AScanListsGoodPluginsAndEveryRefusalThenCarriesOn) {
   const PluginRegistry::ScanResult scan = registry.Scan();
   std::vector<std::string> ids;
   for (const PluginInfo& p : scan.plugins) ids.push_back(p.id);
-  // Loading succeeds for these three; the throwing one fails only when an instance is made.
-  EXPECT_EQ(ids, (std::vector<std::string>{"fake_good", "fake_renamed", "fake_throwing"}));
-  ASSERT_EQ(scan.problems.size(), 4u);
-  for (const char* bad : {"fake_garbage", "fake_newer_sdk", "fake_other_abi", "fake_plain"}) {
+  // Loading succeeds for these two; the throwing one fails only when an instance is made. The
+  // misnamed file loads, but no lookup by name would use it: a problem, not a plugin.
+  EXPECT_EQ(ids, (std::vector<std::string>{"fake_good", "fake_throwing"}));
+  ASSERT_EQ(scan.problems.size(), 5u);
+  for (const char* bad : {"fake_garbage", "fake_misnamed", "fake_newer_sdk", "fake_other_abi", "fake_plain"}) {
     bool named = false;
     for (const std::string& p : scan.problems) {
       named = named || p.rfind(fs::canonical(UBERSIM_FAKE_PLUGIN_DIR).string() + "/libubersim_" + bad + ".so: ", 0) == 0;

@@ -46,6 +46,14 @@ class ModelError : public std::runtime_error {
   std::string reason_;
 };
 
+/// A model file names a plugin that cannot be used: not found in the search path, or found and
+/// refused (the reason says which, and why). Located at the `plugin:` key like any ModelError;
+/// the CLI exits 4 for it, as for any plugin error.
+class PluginLookupError : public ModelError {
+ public:
+  using ModelError::ModelError;
+};
+
 /// One overhead camera: where it hangs and the part of the carpet it is responsible for.
 struct CameraModel {
   int id = 0;                        ///< camera_id in the packets
@@ -236,8 +244,9 @@ struct WorldModel {
   bool local_only = false;
 };
 
-/// Gives the JSON Schema of a plugin's parameter block, or throws std::runtime_error saying why
-/// the plugin is unavailable (not found with the paths searched, failed to load and why).
+/// Gives the JSON Schema of a plugin's parameter block, or throws saying why the plugin is
+/// unavailable: a PluginLoadError (plugin_registry.hpp) whose not_found() is false means it was
+/// found and refused; any other exception, that it is unknown (not found, the paths searched).
 using PluginSchemaLookup =
     std::function<std::string(PluginKind kind, const std::string& plugin_id)>;
 

@@ -28,13 +28,16 @@ struct PluginInfo {
 /// and the reason.
 class PluginLoadError : public std::runtime_error {
  public:
-  /// `where` is the library path or the id asked for; `reason` says why.
-  PluginLoadError(std::string where, std::string reason);
+  /// `where` is the library path or the id asked for; `reason` says why. `not_found`: no library
+  /// of that id is anywhere in the search path (as opposed to one found and refused).
+  PluginLoadError(std::string where, std::string reason, bool not_found = false);
   const std::string& where() const { return where_; }    ///< file or id
   const std::string& reason() const { return reason_; }  ///< why
+  bool not_found() const { return not_found_; }          ///< nothing of that id was found at all
  private:
   std::string where_;
   std::string reason_;
+  bool not_found_ = false;
 };
 
 /// Finds, loads and checks plugin libraries (Boost.DLL), and creates plugin instances that keep
@@ -70,9 +73,13 @@ class PluginRegistry {
   /// kind, duplicate id); throws PluginLoadError naming the file and the reason.
   const PluginInfo& LoadFile(const std::filesystem::path& file);
 
-  /// Finds plugin `id` of `kind`: already loaded, else libubersim_<id>.so in the search paths.
-  /// Throws PluginLoadError listing every path tried and the ids found there.
+  /// Finds plugin `id` of `kind`: already loaded, else the first libubersim_<id>.so in the search
+  /// paths that loads and is of that id and kind. A refused file earlier in the path does not hide
+  /// a good one later: it is skipped, and said so in Skipped(). Throws PluginLoadError naming every
+  /// refused file and why, or (not_found) every path tried and the ids found there.
   const PluginInfo& Find(PluginKind kind, const std::string& id);
+  /// Files Find passed over on its way to a good one, as "<file>: <reason>", in the order met.
+  const std::vector<std::string>& Skipped() const { return skipped_; }
 
   /// Registers an in-process plugin (tests, built-ins); throws PluginLoadError on a duplicate id.
   void Add(const PluginDescriptor& descriptor);
@@ -89,6 +96,7 @@ class PluginRegistry {
   std::shared_ptr<void> Create(PluginKind kind, const std::string& id);
   std::vector<std::filesystem::path> search_paths_;
   std::map<std::string, std::shared_ptr<Entry>> entries_;  // by id
+  std::vector<std::string> skipped_;
 };
 
 }  // namespace ubersim::kernel
