@@ -67,6 +67,29 @@ TEST(Cli, ValidateReportsFileLineColumnAndKey) {
   fs::remove_all(dir);
 }
 
+// cli.md's exit codes: a model file naming a plugin that is not there is a plugin error, 4, at the
+// plugin key's line, under validate and run alike; a typo in a key is an invalid model, 3.
+TEST(Cli, ExitCodesAreTheOnesCliMdGives) {
+  const fs::path dir = TempDir() / "codes";
+  fs::create_directories(dir);
+  std::ofstream(dir / "robot.yaml") << "kind: robot\nname: r\nbody: {mass: 2.3, radius: 0.09, height: 0.146}\n"
+                                       "drive: {plugin: warp_drive}\n";
+  const fs::path world = dir / "world.yaml";
+  std::ofstream(world) << "kind: world\nname: w\nfield: " << kModels << "/fields/div-b.yaml\nball: " << kModels
+                       << "/balls/golf.yaml\nrobots:\n  - {team: blue, id: 0, model: robot.yaml, x: 0, y: 0}\n";
+  for (const std::string command : {"validate " + (dir / "robot.yaml").string(),
+                                    "run " + world.string() + " --fast --duration 0.1 --local-only"}) {
+    const Result r = RunUbersim(command);
+    EXPECT_EQ(r.exit_code, 4) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find((dir / "robot.yaml").string() + ":4:"), std::string::npos) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find("unknown plugin 'warp_drive'"), std::string::npos) << command << "\n" << r.output;
+  }
+  std::ofstream(dir / "robot.yaml") << "kind: robot\nname: r\nbody: {mass: 2.3, radius: 0.09, heigth: 0.146}\n";
+  EXPECT_EQ(RunUbersim("validate " + (dir / "robot.yaml").string()).exit_code, 3);
+  EXPECT_EQ(RunUbersim("run --no-such-flag").exit_code, 2);
+  fs::remove_all(dir);
+}
+
 // `validate` and `run` agree on a robot file: a URDF that `run` would refuse (a link without a
 // mass) makes `validate` refuse the robot file, and the world naming it, at the URDF's line.
 TEST(Cli, ValidateAndRunRefuseTheSameBrokenUrdf) {
