@@ -376,6 +376,7 @@ void WorldImpl::Rebuild() {
   scene_.reset();
   world_.reset();
   pending_queries_.clear();
+  repeated_.Clear();  // simulated time starts again
   clock_.Reset();
   sim_time_ns_ = 0;
   ode_random_seed_ = static_cast<unsigned long>(model_.seed);
@@ -500,7 +501,8 @@ void WorldImpl::Apply(const CommandEvent& e) {
   Robot* r = FindRobot(e.robot);
   if (!r) {
     ++event_counters_.rejected;
-    log_.Warning("command for unknown robot " + ToString(e.robot) + " ignored");
+    repeated_.Warn("unknown robot " + ToString(e.robot), "command for unknown robot " + ToString(e.robot) + " ignored",
+                   sim_time_ns_);
     return;
   }
   bool finite = !e.dribbler_speed || std::isfinite(*e.dribbler_speed);
@@ -522,7 +524,8 @@ void WorldImpl::Apply(const CommandEvent& e) {
   }
   if (!finite) {
     ++event_counters_.rejected;
-    log_.Warning("command for robot " + ToString(e.robot) + " with non-finite values ignored");
+    repeated_.Warn("non-finite command " + ToString(e.robot),
+                   "command for robot " + ToString(e.robot) + " with non-finite values ignored", sim_time_ns_);
     return;
   }
   if (!radio_.Send(e, sim_time_ns_)) ++event_counters_.lost;
@@ -535,7 +538,8 @@ void WorldImpl::Deliver(const CommandEvent& e) {
     ++event_counters_.applied;
   } else {
     ++event_counters_.rejected;
-    log_.Warning("command for robot " + ToString(e.robot) + " partly refused: " + why);
+    repeated_.Warn("refused command " + ToString(e.robot) + ": " + why,
+                   "command for robot " + ToString(e.robot) + " partly refused: " + why, sim_time_ns_);
   }
 }
 

@@ -26,6 +26,7 @@
 #include "physics/ode_handles.hpp"
 #include "physics/scene_graph.hpp"
 #include "world/fault_monitor.hpp"
+#include "world/repeated_warnings.hpp"
 
 namespace ubersim::kernel {
 
@@ -201,6 +202,7 @@ class WorldImpl {
   RadioLink radio_;
   std::function<void(const VisionFrame&)> vision_observer_;
   FaultMonitor faults_;
+  RepeatedWarnings repeated_{log_, 1'000'000'000};  // refused commands: one line per robot per simulated second
   LastGoodState last_good_;
   bool stopped_ = false;
 };
