@@ -70,17 +70,25 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
       "(README.md) with SVG plots. Exit code 5 when a number is outside its band.\n\noptions");
   std::string out = "docs/validation";
   std::vector<std::string> only, plugin_paths;
+  std::string robot_file;
   PhysicsFlags physics_flags;
   desc.add_options()("help,h", "this help")
       ("out", po::value<std::string>(&out)->default_value(out), "folder for README.md and the plots")
       ("only", po::value<std::vector<std::string>>(&only), "run only scenario ID (repeatable)")
       ("list", "list the scenarios and exit")
+      ("robot", po::value<std::string>(&robot_file),
+       "run the drive, kicker and dribbler scenarios on robot FILE instead, against its own limits (needs --out)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
   physics_flags.AddTo(desc);  // other settings need --out: the default folder is the shipped report
   po::variables_map vm;
   if (const auto done = ParseCommandLine(args, "validate-physics", desc, vm)) return *done;
   kernel::PhysicsOverrides physics;
   if (!physics_flags.Read(vm, "validate-physics", physics)) return kExitUsage;
+  if (!robot_file.empty() && vm["out"].defaulted()) {
+    std::cerr << "ubersim validate-physics: give --out DIR with --robot (" << out
+              << " holds the report of the shipped models)\n";
+    return kExitUsage;
+  }
   if (physics.Any() && vm["out"].defaulted()) {
     std::cerr << "ubersim validate-physics: give --out DIR when trying other physics settings ("
               << out << " holds the report of the shipped settings)\n";
@@ -90,12 +98,19 @@ int ValidatePhysicsCommand(const std::vector<std::string>& args) {
     for (const auto& s : validation::AllScenarios()) std::printf("%-24s %s\n", s.id.c_str(), s.title.c_str());
     return kExitOk;
   }
-  const std::vector<const validation::Scenario*> chosen = ChosenScenarios(only);
   std::ostringstream warnings;
   kernel::StreamLog log(warnings, LogLevel::kWarning);
   const WorldLoading loading = LoadingFor({}, plugin_paths);  // the scenarios' worlds are the shipped ones
   validation::Environment env{kernel::DataDir() / "models", kernel::ModelLoader::DefaultSchemaDir(),
                               loading.registry.get(), &log, physics};
+  std::vector<validation::Scenario> robot_scenarios;
+  std::vector<const validation::Scenario*> chosen;
+  if (!robot_file.empty()) {
+    robot_scenarios = validation::RobotScenarios(env, robot_file);
+    for (const auto& s : robot_scenarios) chosen.push_back(&s);
+  } else {
+    chosen = ChosenScenarios(only);
+  }
   std::vector<validation::ScenarioResult> results;
   int out_of_band = 0;
   for (const validation::Scenario* s : chosen) results.push_back(RunScenario(*s, env, out_of_band));

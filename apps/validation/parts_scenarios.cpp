@@ -3,6 +3,8 @@
 // ground truth read back.
 #include "parts_scenarios.hpp"
 
+#include <cstdio>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -73,6 +75,12 @@ kernel::WorldModel RobotWithBall(const Environment& env, const std::string& robo
   return w;
 }
 
+std::string FormatLimit(double v) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%g m/s", v);
+  return text;
+}
+
 double KickerParam(const kernel::RobotModel& r, const char* key, double fallback) {
   return r.kicker ? r.kicker->params.GetDouble(key, fallback) : fallback;
 }
@@ -84,15 +92,22 @@ ScenarioResult KickerSpeeds(const Environment& env, const std::string& robot_fil
   r.id = id;
   r.title = "Kicker: flat kicks clamped to the rules' limit, chips at the kicker's angle" +
             (robot_file == kPartsRobot ? std::string() : " (" + robot_file + ")");
-  r.setup = "The modern robot (models/" + robot_file + ", solenoid kicker: flat limit 6.5 m/s, "
-            "the rules' ball-speed limit) stands with the ball resting against its front. A flat kick is "
-            "commanded at 10 m/s; the ball's speed as it leaves is the largest in the next 50 ms. Then, "
+  // The robot's own flat limit (6.5 m/s, the rules' ball-speed limit, for the shipped robots),
+  // commanded 3.5 m/s above it.
+  const double limit = KickerParam(*RobotWithBall(env, robot_file).robots.front().model, "max_flat_speed", 6.5);
+  const double commanded = limit + 3.5;
+  char number[32];
+  std::snprintf(number, sizeof number, "%g", commanded);
+  r.setup = "The robot (models/" + robot_file + ", its kicker's flat limit " + FormatLimit(limit) +
+            ") stands with the ball resting against its front. A flat kick is "
+            "commanded at " + number + " m/s; the ball's speed as it leaves is the largest in the next 50 ms. Then, "
             "with the ball put back, a chip is commanded at 3 m/s: its speed and elevation as it leaves.";
   {
     PartsBench p(env, RobotWithBall(env, robot_file));
     p.Drive(LocalVelocityCommand{}, 0.0, 0.3, [] {});  // the ball settles against the front
-    r.metrics.push_back(Band("flat_kick_commanded_10", p.Kick(KickCommand{10.0, 0.0}), "m/s", 6.4, 6.6,
-                             "issue: 10 m/s commanded leaves at 6.5 ± 0.1 m/s"));
+    r.metrics.push_back(Band(std::string("flat_kick_commanded_") + number, p.Kick(KickCommand{commanded, 0.0}), "m/s",
+                             limit - 0.1, limit + 0.1,
+                             std::string("issue: ") + number + " m/s commanded leaves at the limit ± 0.1 m/s"));
   }
   {
     PartsBench p(env, RobotWithBall(env, robot_file));

@@ -1,27 +1,37 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "ubersim/validation/scenarios.hpp"
 
 namespace ubersim::validation::detail {
 
-/// An omni robot model the robot scenarios drive: the drive plugin it names, which is also the
-/// scenario ids' prefix ("omni_steady_velocity", "omni_force_steady_velocity"), and its file
-/// (relative to the models folder).
+/// A robot model the robot scenarios drive: the scenario ids' prefix (the drive plugin for the
+/// shipped robots: "omni_steady_velocity", "omni_force_steady_velocity"), its file (relative to
+/// the models folder, or absolute), and the limits the commands and bands are scaled to.
 struct OmniModel {
-  const char* drive;
-  const char* file;
+  std::string drive;               ///< id prefix
+  std::string file;                ///< robot model file
+  double max_speed = 3.0;          ///< m/s, the drive's limits.max_speed
+  double max_accel = 3.0;          ///< m/s², the drive's limits.max_accel
+  double max_angular_speed = 10.0; ///< rad/s, the drive's limits.max_angular_speed
+  std::string name;                ///< in titles; empty: "Omni robot"
 };
 /// The modern four-wheel robot on the omni drive: a body per wheel on a motorised hinge.
-inline constexpr OmniModel kWheelBodyOmni{"omni", "robots/ssl-omni-2026.yaml"};
+inline const OmniModel kWheelBodyOmni{"omni", "robots/ssl-omni-2026.yaml"};
 /// The same robot on the omni_force drive: one rigid body, the wheel forces applied to it.
-inline constexpr OmniModel kForceOmni{"omni_force", "robots/ssl-omni-2026-force.yaml"};
+inline const OmniModel kForceOmni{"omni_force", "robots/ssl-omni-2026-force.yaml"};
 
 /// The modern four-wheel omni robot holds commanded velocities: forward, sideways, diagonal, turning.
 ScenarioResult OmniSteadyVelocity(const Environment& env, const OmniModel& model = kWheelBodyOmni);
 /// The omni robot speeds up at its configured acceleration limit.
 ScenarioResult OmniAcceleration(const Environment& env, const OmniModel& model = kWheelBodyOmni);
+
+/// A team's robot file as the robot scenarios drive it: its drive's limits read from the file
+/// (schema defaults where it leaves them out), ids prefixed with the file's stem.
+OmniModel RobotUnderTest(const Environment& env, const std::filesystem::path& file);
 
 }  // namespace ubersim::validation::detail

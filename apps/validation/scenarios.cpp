@@ -38,6 +38,29 @@ const std::vector<Scenario>& AllScenarios() {
   return kAll;
 }
 
+std::vector<Scenario> RobotScenarios(const Environment& env, const std::filesystem::path& robot_file) {
+  using namespace detail;
+  const OmniModel m = RobotUnderTest(env, robot_file);
+  const kernel::ModelLoader loader(env.schema_dir, [&env](PluginKind kind, const std::string& id) {
+    return env.registry->Find(kind, id).schema_json;
+  });
+  const auto robot = loader.LoadRobot(robot_file);
+  std::vector<Scenario> out = {
+      {m.drive + "_steady_velocity", m.name + ": steady speed follows the command",
+       [m](const Environment& e) { return OmniSteadyVelocity(e, m); }},
+      {m.drive + "_acceleration", m.name + ": speed-up follows its acceleration limit",
+       [m](const Environment& e) { return OmniAcceleration(e, m); }}};
+  if (robot->kicker) {
+    out.push_back({m.drive + "_kicker_speeds", m.name + ": kicker flat limit and chip angle",
+                   [m](const Environment& e) { return KickerSpeeds(e, m.file, m.drive + "_kicker_speeds"); }});
+  }
+  if (robot->dribbler) {
+    out.push_back({m.drive + "_dribbler_hold", m.name + ": dribbler holds the ball while turning and driving",
+                   [m](const Environment& e) { return DribblerHold(e, m.file, m.drive + "_dribbler_hold"); }});
+  }
+  return out;
+}
+
 const Scenario& FindScenario(const std::string& id) {
   std::string ids;
   for (const Scenario& s : AllScenarios()) {

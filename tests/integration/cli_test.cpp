@@ -90,6 +90,36 @@ TEST(Cli, ExitCodesAreTheOnesCliMdGives) {
   fs::remove_all(dir);
 }
 
+// A team checks its own robot: validate-physics --robot runs the drive, kicker and dribbler
+// scenarios on any robot file against its own limits, into the folder it is given.
+TEST(Cli, ValidatePhysicsChecksATeamsOwnRobot) {
+  const fs::path dir = TempDir() / "own-robot";
+  fs::remove_all(dir);
+  const fs::path robot = dir / "our-bot.yaml";
+  fs::create_directories(dir);
+  std::string text;
+  {
+    std::ifstream in(kModels + "/robots/ssl-omni-2026.yaml");
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  // A slower robot than the shipped one: its own limits scale the commands and the bands.
+  const std::string from = "    max_speed: 3.0";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(), "    max_speed: 2.1");
+  std::ofstream(robot) << text;
+  EXPECT_EQ(RunUbersim("validate-physics --robot " + robot.string()).exit_code, 2) << "--out is needed";
+  const Result r = RunUbersim("validate-physics --robot " + robot.string() + " --out " + (dir / "report").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  for (const char* id : {"our_bot_steady_velocity", "our_bot_acceleration", "our_bot_kicker_speeds", "our_bot_dribbler_hold"}) {
+    EXPECT_NE(r.output.find(std::string("ok   ") + id), std::string::npos) << id << "\n" << r.output;
+  }
+  std::ifstream report(dir / "report" / "README.md");
+  const std::string md((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_NE(md.find("1.4 m/s commanded from rest"), std::string::npos) << "two thirds of its 2.1 m/s";
+  EXPECT_TRUE(fs::exists(dir / "report" / "our-bot-acceleration.svg"));
+  fs::remove_all(dir);
+}
+
 // `validate` and `run` agree on a robot file: a URDF that `run` would refuse (a link without a
 // mass) makes `validate` refuse the robot file, and the world naming it, at the URDF's line.
 TEST(Cli, ValidateAndRunRefuseTheSameBrokenUrdf) {

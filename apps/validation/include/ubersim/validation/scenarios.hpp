@@ -35,6 +35,10 @@ struct Scenario {
 /// Every scenario, in report order.
 const std::vector<Scenario>& AllScenarios();
 
+/// The drive, kicker and dribbler scenarios on a team's own robot file (`validate-physics
+/// --robot`): commands and bands scaled to the limits its drive's parameters give; a kicker or
+/// dribbler scenario only when it has one. Throws ModelError or PluginLoadError for a bad file.
+std::vector<Scenario> RobotScenarios(const Environment& env, const std::filesystem::path& robot_file);
 /// The scenario with that id; throws std::out_of_range listing the ids.
 const Scenario& FindScenario(const std::string& id);
 
