@@ -32,7 +32,7 @@ std::string RobotName(const OmniModel& m) {
 }
 // The model file and, for another drive, its name.
 std::string Which(const OmniModel& m) {
-  if (!m.name.empty()) return m.file;
+  if (!m.name.empty()) return std::filesystem::path(m.file).is_absolute() ? m.file : "models/" + m.file;
   return std::string("models/") + m.file + (IsWheelBody(m) ? "" : std::string(", the ") + m.drive + " drive");
 }
 
@@ -127,6 +127,45 @@ ScenarioResult OmniAcceleration(const Environment& env, const OmniModel& model) 
   char ideal_name[64];
   std::snprintf(ideal_name, sizeof ideal_name, "ideal (limit %g m/s²)", kLimit);
   p.series = {Series{"ÜberSim", t, v, false}, Series{ideal_name, t, ideal, true}};
+  r.plots.push_back(p);
+  return r;
+}
+
+ScenarioResult MecanumGripLimit(const Environment& env) {
+  ScenarioResult r;
+  r.id = "mecanum_grip_limit";
+  r.title = "Mecanum robot: a wheel spin-up is grip-limited at μ·g·cos 45°";
+  const kernel::WorldModel world = OneRobot(env, "worlds/div-b.yaml", kMecanum.file);
+  const kernel::RobotModel& robot = *world.robots.front().model;
+  double mu = 0.8;  // the drive's mu_roll: the grip across the rollers
+  if (robot.drive && robot.drive->params.Has("surface")) mu = robot.drive->params["surface"].GetDouble("mu_roll", mu);
+  constexpr double kG = 9.81;
+  const double limit = mu * kG * std::cos(M_PI / 4);
+  r.setup = "The mecanum robot (" + Which(kMecanum) + ") alone on the Div B field gets wheel speeds of 100 rad/s "
+            "straight ahead at once (front-left and rear-left −100, the right wheels +100; the servo loop "
+            "bypassed), more than the carpet can follow: the wheels slip. Each wheel's carpet force acts across "
+            "its rollers, 45° from forward, so the robot speeds up at most at μ·g·cos 45° (μ = mu_roll " +
+            std::to_string(mu).substr(0, 4) + "), less the free rollers' own drag. The slope of forward speed "
+            "over time is fitted over the first 0.25 s.";
+  Bench bench(env, world);
+  const WheelSpeedCommand spin{{-100.0, -100.0, 100.0, 100.0}};
+  std::vector<double> t, v, ideal;
+  for (int k = 0; k < 25; ++k) {
+    bench.Drive(kRobot, spin, 0.01);
+    t.push_back(bench.Time());
+    v.push_back(LocalVelocity(bench.Robot(kRobot)).x());
+    ideal.push_back(limit * t.back());
+  }
+  std::vector<double> tf(t.begin() + 2, t.end()), vf(v.begin() + 2, v.end());
+  const double slope = FitLine(tf, vf).slope;
+  r.metrics.push_back(Band("speed_up_vs_mu_g_cos45", slope / limit, "ratio", 0.85, 1.02,
+                           "issue: grip-limited at μ·g·cos 45° (the free rollers' drag, μ 0.05, takes up to 6 %)"));
+  Plot p;
+  p.file = "mecanum-grip-limit.svg";
+  p.title = "Mecanum robot: wheels spun up at once, speed-up limited by grip";
+  p.x_label = "time (s)";
+  p.y_label = "forward speed (m/s)";
+  p.series = {Series{"ÜberSim", t, v, false}, Series{"μ·g·cos 45°", t, ideal, true}};
   r.plots.push_back(p);
   return r;
 }

@@ -24,11 +24,17 @@ struct OmniModel {
 inline const OmniModel kWheelBodyOmni{"omni", "robots/ssl-omni-2026.yaml"};
 /// The same robot on the omni_force drive: one rigid body, the wheel forces applied to it.
 inline const OmniModel kForceOmni{"omni_force", "robots/ssl-omni-2026-force.yaml"};
+/// The same body on four mecanum wheels, rollers at 45° to the axles.
+inline const OmniModel kMecanum{"mecanum", "robots/ssl-mecanum-2026.yaml", 3.0, 3.0, 10.0, "Mecanum robot"};
 
 /// The modern four-wheel omni robot holds commanded velocities: forward, sideways, diagonal, turning.
 ScenarioResult OmniSteadyVelocity(const Environment& env, const OmniModel& model = kWheelBodyOmni);
 /// The omni robot speeds up at its configured acceleration limit.
 ScenarioResult OmniAcceleration(const Environment& env, const OmniModel& model = kWheelBodyOmni);
+
+/// The mecanum robot's wheels driven straight ahead faster than the carpet can follow: the
+/// speed-up is grip-limited at μ·g·cos 45° (each wheel's carpet force acts across its rollers).
+ScenarioResult MecanumGripLimit(const Environment& env);
 
 /// A team's robot file as the robot scenarios drive it: its drive's limits read from the file
 /// (schema defaults where it leaves them out), ids prefixed with the file's stem.

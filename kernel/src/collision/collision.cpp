@@ -586,6 +586,11 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n) {
       dir -= normal * normal.dot(dir);  // project onto the contact plane
       if (dir.norm() > 1e-6) {
         dir.normalize();
+        if (const double turn = directional->friction_axis_turn(); turn != 0.0) {
+          // Rollers at an angle to the axle: turned about the normal pointing into the wheel.
+          const Vec3 into = directional == &a ? normal : Vec3(-normal);
+          dir = Eigen::AngleAxisd(turn, into) * dir;
+        }
         mode |= dContactMu2 | dContactFDir1;
         c.fdir1[0] = dir.x();
         c.fdir1[1] = dir.y();

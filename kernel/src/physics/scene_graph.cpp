@@ -165,6 +165,7 @@ GeomImpl::GeomImpl(NodeImpl& owner, const GeomSpec& spec, BodyImpl* body)
       shape_(spec.shape),
       material_(spec.material),
       friction_axis_(spec.friction_axis),
+      friction_axis_turn_(spec.friction_axis_turn),
       body_(body),
       collides_(spec.collides),
       scope_(spec.scope),

@@ -85,6 +85,8 @@ class GeomImpl final : public Geom {
   bool is_plane() const { return shape_.kind == Shape::Kind::kPlane; }  ///< an infinite plane
   /// Directional-friction axis in the body frame, if any.
   const std::optional<Vec3>& friction_axis() const { return friction_axis_; }
+  /// The friction axis's turn about the contact normal, rad (GeomSpec::friction_axis_turn).
+  double friction_axis_turn() const { return friction_axis_turn_; }
   /// World bounding sphere now (infinite for planes).
   BoundingSphere WorldBounds() const;
   /// The bounding sphere as of the last SceneGraph::UpdateBounds().
@@ -120,6 +122,7 @@ class GeomImpl final : public Geom {
   SurfaceMaterial material_;
   std::uint64_t material_version_ = 0;
   std::optional<Vec3> friction_axis_;
+  double friction_axis_turn_ = 0.0;
   std::optional<FlatFrontPrism> prism_;
   const NodeImpl* robot_ = nullptr;
   bool hull_ = false;

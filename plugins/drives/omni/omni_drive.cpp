@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
-// omni: an omni-directional drive with any number of omni wheels at any angles.
+// omni and mecanum: omni-directional drives with any number of roller wheels at any angles.
 //
-// Each wheel is a body on a motorised hinge. Its contact with the carpet has high friction along
-// the rolling direction and low friction along the axle (the free rollers), which ODE models as
-// directional friction: the geometry's friction axis is the axle. A local servo loop turns the
-// move command into a velocity setpoint limited in speed, acceleration and braking, and the
-// setpoint into wheel speeds through the wheel geometry, as the robots' firmware does.
+// Each wheel is a body on a motorised hinge. Its contact with the carpet grips across its rollers
+// and slides freely along them, which ODE models as directional friction: the geometry's friction
+// axis is the axle, turned by the rollers' angle (0 for an omni wheel, whose rollers let it slide
+// along the axle; ±45° for a mecanum wheel). A local servo loop turns the move command into a
+// velocity setpoint limited in speed, acceleration and braking, and the setpoint into wheel
+// speeds through the wheel geometry, as the robots' firmware does. The same source builds both
+// plugins (UBERSIM_ROLLER_DRIVE_ID): mecanum differs in its schema, which asks for each wheel's
+// axle and roller angle.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -24,9 +27,16 @@ using ubersim::Vec3;
 // Layout of SaveState's bytes: bump when they change.
 constexpr std::uint32_t kStateLayout = 1;
 
+#ifndef UBERSIM_ROLLER_DRIVE_ID
+#define UBERSIM_ROLLER_DRIVE_ID "omni"
+#endif
+
 struct Wheel {
-  double angle = 0;            // rad, from forward, counter-clockwise
-  Vec3 tangent;                // rolling direction in the robot frame (counter-clockwise)
+  double angle = 0;            // rad, position from forward, counter-clockwise
+  Vec3 position;               // contact point in the robot frame (z = 0)
+  Vec3 grip;                   // the direction the rollers grip in (the rolling direction for omni)
+  double grip_share = 1.0;     // cos of the roller angle: how much of a wheel turn moves along `grip`
+  bool on_circle = true;       // an omni wheel with an inward axle: its lever is the wheel distance
   ubersim::Joint* hinge = nullptr;
 };
 
@@ -48,7 +58,7 @@ class OmniDrive final : public ubersim::Drive {
     if (p.Has("limits")) servo_.SetLimits(ubersim::ReadServoLimits(p["limits"], servo_.Limits()));
     watchdog_.SetTimeout(p.GetDouble("command_timeout", watchdog_.Timeout()));
     ubersim::SurfaceMaterial surface;
-    surface.name = "omni_wheel";
+    surface.name = std::string(UBERSIM_ROLLER_DRIVE_ID) + "_wheel";
     surface.mu = 0.05;   // along the friction axis = the axle
     surface.mu2 = 0.8;   // across it = the rolling direction
     if (p.Has("surface")) {
@@ -68,31 +78,47 @@ class OmniDrive final : public ubersim::Drive {
     const ubersim::ParamView list = p["wheels"];
     for (std::size_t i = 0; i < list.Size(); ++i) {
       Wheel w;
-      w.angle = list.At(i)["angle_deg"].AsDouble() * M_PI / 180.0;
+      const ubersim::ParamView entry = list.At(i);
+      w.angle = entry["angle_deg"].AsDouble() * M_PI / 180.0;
       const Vec3 radial(std::cos(w.angle), std::sin(w.angle), 0.0);
-      w.tangent = Vec3(-std::sin(w.angle), std::cos(w.angle), 0.0);
+      // The axle points inward unless given: a positive rate then rolls the wheel along
+      // axle × z (counter-clockwise about the robot's centre for an inward axle).
+      const bool own_axle = entry.Has("axle_deg");
+      const double axle_angle = own_axle ? entry["axle_deg"].AsDouble() * M_PI / 180.0 : 0.0;
+      const Vec3 axle = own_axle ? Vec3(std::cos(axle_angle), std::sin(axle_angle), 0.0) : Vec3(-radial);
+      const Vec3 rolling = axle.cross(Vec3::UnitZ());
+      const double roller = entry.GetDouble("roller_deg", 0.0) * M_PI / 180.0;
+      if (std::cos(roller) < 0.1) throw ubersim::PluginError("wheel " + std::to_string(i) + ": roller_deg must be within ±84°");
+      w.position = radial * distance_;
+      w.grip = Eigen::AngleAxisd(roller, Vec3::UnitZ()) * rolling;
+      w.grip_share = std::cos(roller);
+      w.on_circle = !own_axle && roller == 0.0;
       ubersim::WheelSpec spec;
       spec.node_name = "wheel" + std::to_string(i);
-      spec.centre = radial * distance_ + Vec3(0, 0, wheel_radius_ - chassis_z);
-      // The axle points inward: a positive rate then rolls the robot along `tangent`
-      // (counter-clockwise about its centre).
-      spec.axle = -radial;
+      spec.centre = w.position + Vec3(0, 0, wheel_radius_ - chassis_z);
+      spec.axle = axle;
+      spec.roller_turn = roller;
       spec.radius = wheel_radius_;
       spec.width = width;
       spec.mass = mass;
       spec.tyre = surface;
-      spec.rollers_along_axle = true;  // mu along the axle (free rollers), mu2 across it
+      spec.rollers_along_axle = true;  // mu along the rollers' free direction, mu2 across it
       spec.holding_torque = max_torque_;
       spec.rotor_inertia = rotor_inertia_;
       spec.tyre_shielded = ubersim::ShellShieldsWheel(body, ctx.BallRadius(), spec);
       w.hinge = &ubersim::AddDrivenWheel(ctx, spec);
       wheels_.push_back(w);
     }
-    // Least-squares inverse of the wheel geometry, for odometry feedback.
+    // A wheel turning at ω moves its contact by r·ω along its rolling direction; the rollers pass
+    // on only the part along `grip`: ω = v_contact·grip / (r·cos roller), v_contact = v + ω_z × p.
+    // For an omni wheel (grip = rolling direction, roller 0) that is v·t/r + ω_z·distance/r.
     Eigen::MatrixXd m(wheels_.size(), 3);
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
-      m.row(static_cast<Eigen::Index>(i)) << wheels_[i].tangent.x(), wheels_[i].tangent.y(), distance_;
+      const Wheel& w = wheels_[i];
+      const double lever = w.on_circle ? distance_ : w.position.x() * w.grip.y() - w.position.y() * w.grip.x();
+      m.row(static_cast<Eigen::Index>(i)) << w.grip.x() / w.grip_share, w.grip.y() / w.grip_share, lever / w.grip_share;
     }
+    // Least-squares inverse of the wheel geometry, for odometry feedback.
     geometry_ = m / wheel_radius_;
     inverse_ = geometry_.completeOrthogonalDecomposition().pseudoInverse();
     wheel_targets_.setZero(static_cast<Eigen::Index>(wheels_.size()));
@@ -197,4 +223,4 @@ class OmniDrive final : public ubersim::Drive {
 
 }  // namespace
 
-UBERSIM_REGISTER_DRIVE(OmniDrive, "omni", "1.0.0", ubersim_plugin::kSchema)
+UBERSIM_REGISTER_DRIVE(OmniDrive, UBERSIM_ROLLER_DRIVE_ID, "1.0.0", ubersim_plugin::kSchema)

@@ -96,6 +96,11 @@ struct GeomSpec {
   std::optional<Vec3> friction_axis;
   bool collides = true;                ///< false: a sensor-like geometry that never makes contacts
   ContactScope scope = ContactScope::kAll;  ///< what it may touch
+  /// With `friction_axis`: the axis, once projected onto the contact plane, is turned by this
+  /// angle (rad, counter-clockwise about the contact normal pointing into this geometry) before
+  /// `material.mu` acts along it. A wheel's rollers at an angle to its axle: the axle turns with
+  /// the wheel's body, the free direction stays fixed to the chassis (mecanum: ±45°).
+  double friction_axis_turn = 0.0;
 };
 
 /// Mass properties of a body.

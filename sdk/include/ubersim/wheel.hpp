@@ -20,9 +20,13 @@ struct WheelSpec {
   double width = 0.01;                 ///< along the axle, m
   double mass = 0.05;                  ///< kg
   SurfaceMaterial tyre;                ///< the tyre's surface (on the carpet and everything else)
-  /// Directional friction: `tyre.mu` acts along the axle and `tyre.mu2` across it (an omni
-  /// wheel's free rollers); unset: the same grip every way.
+  /// Directional friction: `tyre.mu` acts along the rollers' free direction and `tyre.mu2`
+  /// across it, the grip; unset: the same grip every way.
   bool rollers_along_axle = false;
+  /// With rollers: the angle of the free direction from the axle, rad, counter-clockwise seen
+  /// from above the carpet (0: an omni wheel, free along the axle; ±π/4: a mecanum wheel, whose
+  /// rollers sit at 45° to the axle).
+  double roller_turn = 0.0;
   double holding_torque = 0.5;         ///< N·m the motor holds the wheel still with until commanded
   /// kg·m² the motor's rotor and gears add about the axle (rotor inertia × gear ratio²).
   double rotor_inertia = 0.0;
@@ -81,7 +85,10 @@ inline Joint& AddDrivenWheel(RobotContext& ctx, const WheelSpec& spec) {
   tyre.shape = Shape::Cylinder(spec.radius, spec.width);
   tyre.material = spec.tyre;
   tyre.scope = ContactScope::kNoPlanes;
-  if (spec.rollers_along_axle) tyre.friction_axis = Vec3::UnitZ();  // the cylinder's axis is the axle
+  if (spec.rollers_along_axle) {
+    tyre.friction_axis = Vec3::UnitZ();  // the cylinder's axis is the axle
+    tyre.friction_axis_turn = spec.roller_turn;
+  }
   if (!spec.tyre_shielded) node.AddGeom(tyre, &wheel);
   GeomSpec contact = tyre;
   contact.name = "carpet_contact";
