@@ -110,6 +110,20 @@ TEST(PhysicsValidation, OmniForceRobotsDribblerHoldsTheBallDrivingAndTurningAndL
   EXPECT_EQ(r.plots.at(0).file, "omni-force-dribbler-hold.svg");
 }
 
+TEST(PhysicsValidation, MecanumRobotHoldsEveryCommandIncludingSideways) {
+  const ScenarioResult r = RunAndCheck("mecanum_steady_velocity");
+  EXPECT_NEAR(r.Get("sideways_speed").value, 1.0, 0.01);  // rollers at 45°: sideways is possible
+  EXPECT_NEAR(r.Get("diagonal_speed").value, 1.0, 0.01);
+}
+
+TEST(PhysicsValidation, MecanumRobotAcceleratesAtItsLimit) { RunAndCheck("mecanum_acceleration"); }
+
+TEST(PhysicsValidation, MecanumRobotsSpinUpIsGripLimitedAtMuGCos45) {
+  const ScenarioResult r = RunAndCheck("mecanum_grip_limit");
+  EXPECT_GT(r.Get("speed_up_vs_mu_g_cos45").value, 0.9);  // the free rollers' drag takes a few %
+  EXPECT_EQ(r.plots.at(0).file, "mecanum-grip-limit.svg");
+}
+
 TEST(PhysicsValidation, PaperDifferentialRobotAcceleratesAtTwoMetresPerSecondSquared) {
   const ScenarioResult r = RunAndCheck("paper_acceleration");
   ASSERT_EQ(r.plots.size(), 1u);
@@ -144,6 +158,7 @@ void ExpectFastSettingsKeep(int other_iterations, bool (*pick)(const std::string
 }
 
 bool IsPaperScenario(const std::string& id) { return id.rfind("paper_", 0) == 0; }
+bool IsMecanumScenario(const std::string& id) { return id.rfind("mecanum_", 0) == 0; }
 
 // The fast settings docs/performance.md measures Div A at: 5 ms, 10 iterations for the ball's
 // islands and 2 for the others, one contact per pair. Every number of the ball, the modern
@@ -151,7 +166,14 @@ bool IsPaperScenario(const std::string& id) { return id.rfind("paper_", 0) == 0;
 // inertia (models/robots/ssl-omni-2026.yaml) the omni robot's sideways speed falls 5 % short
 // at 2 iterations: the check can fail.
 TEST(PhysicsValidation, TheFastSettingsKeepEveryNumberOfTheModernRobots) {
-  ExpectFastSettingsKeep(2, [](const std::string& id) { return !IsPaperScenario(id); });
+  ExpectFastSettingsKeep(2, [](const std::string& id) { return !IsPaperScenario(id) && !IsMecanumScenario(id); });
+}
+
+// The mecanum robot at 5 ms needs 6 iterations for the islands without the ball, as the 2003
+// robot does: at 2 its wheels' turned friction directions are solved too loosely (it turns 8 %
+// fast and speeds up at 0.81 of its limit: the check can fail).
+TEST(PhysicsValidation, TheFastSettingsWithSixIterationsKeepTheMecanumRobotsNumbers) {
+  ExpectFastSettingsKeep(6, IsMecanumScenario);
 }
 
 // The 2003 world's fast settings: its differential robot on two wheels and two casters needs 6
@@ -166,6 +188,7 @@ TEST(PhysicsValidation, EveryScenarioIsCoveredHere) {
   const std::vector<std::string> tested = {"ball_roll_2", "ball_roll_5", "chip_flight", "no_tunnelling",
                                            "omni_steady_velocity", "omni_acceleration",
                                            "omni_force_steady_velocity", "omni_force_acceleration",
+                                           "mecanum_steady_velocity", "mecanum_acceleration", "mecanum_grip_limit",
                                            "kicker_speeds", "dribbler_hold", "omni_force_kicker_speeds",
                                            "omni_force_dribbler_hold", "paper_acceleration",
                                            "paper_figure_eight"};
