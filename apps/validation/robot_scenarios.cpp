@@ -170,18 +170,14 @@ ScenarioResult MecanumGripLimit(const Environment& env) {
   return r;
 }
 
-OmniModel RobotUnderTest(const Environment& env, const std::filesystem::path& file) {
-  const kernel::ModelLoader loader(env.schema_dir, [&env](PluginKind kind, const std::string& id) {
-    return env.registry->Find(kind, id).schema_json;
-  });
-  const auto robot = loader.LoadRobot(file);
+OmniModel RobotUnderTest(const kernel::RobotModel& robot, const std::filesystem::path& file) {
   OmniModel m;
   m.drive = file.stem().string();
   std::replace(m.drive.begin(), m.drive.end(), '-', '_');
   m.file = std::filesystem::absolute(file).lexically_normal().string();
-  m.name = "Robot " + robot->name;
-  if (robot->drive) {
-    const ParamView& p = robot->drive->params;
+  m.name = "Robot " + robot.name;
+  if (robot.drive) {
+    const ParamView& p = robot.drive->params;
     if (p.Has("limits")) {
       const ParamView limits = p["limits"];
       m.max_speed = limits.GetDouble("max_speed", m.max_speed);

@@ -36,8 +36,8 @@ ScenarioResult OmniAcceleration(const Environment& env, const OmniModel& model =
 /// speed-up is grip-limited at μ·g·cos 45° (each wheel's carpet force acts across its rollers).
 ScenarioResult MecanumGripLimit(const Environment& env);
 
-/// A team's robot file as the robot scenarios drive it: its drive's limits read from the file
-/// (schema defaults where it leaves them out), ids prefixed with the file's stem.
-OmniModel RobotUnderTest(const Environment& env, const std::filesystem::path& file);
+/// A team's robot, loaded from `file`, as the robot scenarios drive it: its drive's limits read
+/// from the model (schema defaults where the file leaves them out), ids prefixed with the file's stem.
+OmniModel RobotUnderTest(const kernel::RobotModel& robot, const std::filesystem::path& file);
 
 }  // namespace ubersim::validation::detail

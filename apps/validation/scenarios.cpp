@@ -44,11 +44,11 @@ const std::vector<Scenario>& AllScenarios() {
 
 std::vector<Scenario> RobotScenarios(const Environment& env, const std::filesystem::path& robot_file) {
   using namespace detail;
-  const OmniModel m = RobotUnderTest(env, robot_file);
   const kernel::ModelLoader loader(env.schema_dir, [&env](PluginKind kind, const std::string& id) {
     return env.registry->Find(kind, id).schema_json;
   });
   const auto robot = loader.LoadRobot(robot_file);
+  const OmniModel m = RobotUnderTest(*robot, robot_file);
   std::vector<Scenario> out = {
       {m.drive + "_steady_velocity", m.name + ": steady speed follows the command",
        [m](const Environment& e) { return OmniSteadyVelocity(e, m); }},
