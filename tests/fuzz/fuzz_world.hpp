@@ -24,6 +24,7 @@ inline WorldSnapshot Snapshot() {
       r.pose.position = Vec3(team == Team::kBlue ? -1.0 : 1.0, 0.5 * id - 1.25, 0.0);
       r.kicker_ready = true;
       r.dribbler_ball_contact = team == Team::kBlue && id == 0;
+      if (id % 2 == 0) r.drive = DriveFeedback{{1.0, -2.0, 3.0, -4.0}, Twist{}};  // feedback travels too
       s.robots.push_back(r);
     }
   }

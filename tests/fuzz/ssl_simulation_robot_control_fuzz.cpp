@@ -21,7 +21,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     refusal.SerializeAsString();
     return 0;
   }
-  const auto contact = [](const ubersim::RobotId& id) -> std::optional<bool> { return Bridge().Contact(id); };
+  const auto contact = [](const ubersim::RobotId& id) { return Bridge().Report(id); };
   for (ubersim::Team team : {ubersim::Team::kBlue, ubersim::Team::kYellow}) {
     for (bool wheels : {true, false}) {
       const ssl::MappedRobotControl m =

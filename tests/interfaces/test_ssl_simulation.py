@@ -22,6 +22,7 @@ import yaml
 import harness
 import ssl_simulation_control_pb2 as control_pb
 import ssl_simulation_custom_erforce_pb2 as erforce_pb
+import ssl_simulation_custom_ubersim_pb2 as ubersim_pb
 import ssl_simulation_robot_control_pb2 as robot_pb
 import ssl_simulation_robot_feedback_pb2 as feedback_pb
 import ssl_simulation_synchronous_pb2 as sync_pb
@@ -469,6 +470,26 @@ class UdpWithSyncObserver(unittest.TestCase):
         vx, vy = fit_speed(track, t_end - 0.8, t_end)
         self.assertAlmostEqual(vx, 1.0, delta=0.05)
         self.assertAlmostEqual(vy, 0.0, delta=0.05)
+
+        # The robot's own account in its RobotFeedback: what its drive measured (custom, an
+        # UberSimDriveFeedback), agreeing with what the cameras saw.
+        (feedback,) = r.feedback
+        self.assertEqual(feedback.custom.type_url, "type.googleapis.com/UberSimDriveFeedback")
+        drive = ubersim_pb.UberSimDriveFeedback()
+        self.assertTrue(feedback.custom.Unpack(drive))
+        self.assertAlmostEqual(drive.forward, 1.0, delta=0.05)
+        self.assertAlmostEqual(drive.left, 0.0, delta=0.05)
+        self.assertAlmostEqual(drive.angular, 0.0, delta=0.1)
+        self.assertEqual(len(drive.wheel_speeds), 4)
+        # Driving straight ahead at 1 m/s, each wheel rolls at v |sin(angle)| / r (ssl-omni-2026:
+        # wheels at 60, 135, 225, 300 deg, r = 29 mm), the front pair and the back pair each
+        # turning opposite ways.
+        w = list(drive.wheel_speeds)
+        for speed, angle in zip(w, (60, 135, 225, 300)):
+            self.assertAlmostEqual(abs(speed), abs(math.sin(math.radians(angle))) / 0.029,
+                                   delta=0.08 * abs(math.sin(math.radians(angle))) / 0.029, msg=w)
+        self.assertLess(w[0] * w[3], 0.0, w)
+        self.assertLess(w[1] * w[2], 0.0, w)
 
     def test_bad_datagrams_change_nothing(self):
         before = self.positions(self.sync.step(0.1))

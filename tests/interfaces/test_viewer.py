@@ -17,6 +17,7 @@ import math
 import os
 import re
 import shutil
+import socket
 import struct
 import tempfile
 import threading
@@ -25,6 +26,9 @@ import unittest
 from unittest import mock
 
 import harness
+import ssl_simulation_custom_ubersim_pb2 as ubersim_pb
+import ssl_simulation_robot_control_pb2 as robot_pb
+import ssl_simulation_robot_feedback_pb2 as feedback_pb
 import ssl_vision_wrapper_pb2 as wrapper_pb2
 
 CHROMIUM = "/usr/bin/chromium"
@@ -54,6 +58,11 @@ if (!v) return null;
 const s = v.state;
 return {connected: v.connected, frames: v.frames, drawn: v.drawn, world: v.hello ? v.hello.world : null,
         t: s ? s.t : null, ball: s ? s.ball : null, status: s ? s.status : null};
+"""
+# The robot panel's rows as [name, value] pairs.
+PANEL_ROWS_JS = """
+return Array.from(document.querySelectorAll('#robot-panel-rows tr'))
+  .map((r) => [r.cells[0].textContent, r.cells[1].textContent]);
 """
 TO_CLIENT_JS = "return window.ubersimViewer.fieldToClient(arguments[0], arguments[1]);"
 TO_FIELD_JS = "return window.ubersimViewer.clientToField(arguments[0], arguments[1]);"
@@ -193,12 +202,15 @@ class ViewerInBrowser(unittest.TestCase):
         cls.addClassCleanup(shutil.rmtree, cls.workdir, ignore_errors=True)
         cls.started = time.monotonic()
 
-        (vision_port,) = harness.free_udp_ports(1)
+        vision_port, control_port, cls.blue_port, yellow_port = harness.free_udp_ports(4)
         receiver = harness.MulticastReceiver(vision_port)
         cls.addClassCleanup(receiver.close)
         cls.world = harness.World("div-b")
         cls.world.add_transport("viewer", port=0)
         cls.world.add_transport("ssl_vision", port=vision_port, interface=harness.LOOPBACK, timestamps="sim")
+        # A team's software beside the page: commands for a robot the page then shows.
+        cls.world.add_transport("ssl_simulation", control_port=control_port, blue_port=cls.blue_port,
+                                yellow_port=yellow_port)
         cls.world.set_perception(preset="ideal")  # 60 Hz, latency 0, no noise, no drop-outs
         cls.vision = VisionWatcher(receiver)
         cls.addClassCleanup(cls.vision.stop)  # runs before receiver.close (cleanups are LIFO)
@@ -568,7 +580,96 @@ class ViewerInBrowser(unittest.TestCase):
                                                round(rect["inner_height"] * rect["dpr"])))
             self.assertGreater(len(data), 20_000, "a drawn field, not a blank page")
 
-    def test_5_no_errors_in_the_console(self):
+    def test_5_clicking_a_robot_shows_what_its_drive_measures(self):
+        with self.diagnosed():
+            harness.wait_for(lambda: text_of(self.driver, "run-state") == "running", 10.0, what="running")
+            self.assertFalse(self.driver.find_element(By.ID, "robot-panel").is_displayed())
+            robot = harness.wait_for(
+                lambda: next((r for r in self.state()["drawn"]["robots"] if r["team"] == "blue" and r["id"] == 1), None),
+                5.0, what="blue 1 drawn")
+            # A click (press and release without moving) on the robot opens its panel.
+            actions = ActionBuilder(self.driver, duration=40)
+            actions.pointer_action.move_to_location(round(robot["cx"]), round(robot["cy"]))
+            actions.pointer_action.click()
+            actions.perform()
+            panel = self.driver.find_element(By.ID, "robot-panel")
+            harness.wait_for(panel.is_displayed, 5.0, what="the robot panel shown")
+            self.assertEqual(text_of(self.driver, "robot-panel-title"), "blue 1")
+
+            # The team's software turns the robot on the spot at 3 rad/s, a command every 20 ms as
+            # an AI sends them; the panel shows what the drive measures, as the robot's own
+            # feedback (RobotFeedback.custom) does.
+            rc = robot_pb.RobotControl()
+            c = rc.robot_commands.add()
+            c.id = 1
+            v = c.move_command.local_velocity
+            v.forward, v.left, v.angular = 0.0, 0.0, 3.0
+            stop = threading.Event()
+            replies, failures = [], []
+
+            def command():
+                try:
+                    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+                        sock.settimeout(1.0)
+                        while not stop.is_set():
+                            sock.sendto(rc.SerializeToString(), (harness.LOOPBACK, self.blue_port))
+                            with contextlib.suppress(socket.timeout):
+                                reply = feedback_pb.RobotControlResponse()
+                                reply.ParseFromString(sock.recv(65536))
+                                replies.append(reply)
+                            stop.wait(0.02)
+                except Exception as e:  # noqa: BLE001 (reported by the test, not lost in a thread)
+                    failures.append(repr(e))
+
+            sender = threading.Thread(target=command, name="team-ai", daemon=True)
+            sender.start()
+            try:
+                seen = {}
+
+                def turning_in_panel():
+                    self.sim.assert_running()
+                    rows = dict(self.driver.execute_script(PANEL_ROWS_JS))
+                    seen["rows"], seen["replies"] = rows, len(replies)
+                    self.assertEqual(failures, [], "the team's client failed")
+                    said = rows.get("drive says", "")  # "0.00 fwd, 0.00 left m/s · 3.00 rad/s"
+                    match = re.search(r"([-0-9.]+) rad/s$", said)
+                    return rows if match and abs(float(match.group(1)) - 3.0) < 0.15 else None
+                try:
+                    rows = harness.wait_for(turning_in_panel, 10.0, interval=0.1,
+                                            what="the panel showing the drive turning at 3 rad/s")
+                except AssertionError as e:
+                    raise AssertionError(f"{e}; the panel last showed {seen.get('rows')}, "
+                                         f"{seen.get('replies')} replies to the commands") from e
+                truth = next(r for r in self.driver.execute_script("return window.ubersimViewer.state.robots")
+                             if r["team"] == "blue" and r["id"] == 1)
+            finally:
+                stop.set()
+                sender.join(timeout=5)
+
+            # Four wheels, each at the speed the page received, all one sign (turning on the spot).
+            wheels = [rows.get(f"wheel {i}") for i in range(1, 5)]
+            self.assertTrue(all(wheels), rows)
+            speeds = [float(w.split()[0]) for w in wheels]
+            self.assertTrue(all(abs(v) > 3.0 * 0.079 / 0.029 * 0.8 for v in speeds), speeds)  # omega d / r
+            self.assertTrue(all(v > 0 for v in speeds) or all(v < 0 for v in speeds), speeds)
+            self.assertEqual(len(truth["drive"]["wheels"]), 4)
+            self.assertAlmostEqual(truth["drive"]["angular"], truth["w"], delta=0.2,
+                                   msg="the drive's own measure agrees with the truth")
+            # The same measurements reached the team's software.
+            self.assertTrue(replies, "no RobotControlResponse came back")
+            drive = ubersim_pb.UberSimDriveFeedback()
+            self.assertTrue(replies[-1].feedback[0].custom.Unpack(drive))
+            self.assertAlmostEqual(drive.angular, 3.0, delta=0.15)
+
+            # Clicking the carpet closes the panel.
+            x, y = self.to_client(0.0, 2.5)
+            actions = ActionBuilder(self.driver, duration=40)
+            actions.pointer_action.move_to_location(round(x), round(y))
+            actions.pointer_action.click()
+            actions.perform()
+            harness.wait_for(lambda: not panel.is_displayed(), 5.0, what="the panel closed")
+
+    def test_9_no_errors_in_the_console(self):
         with self.diagnosed():
             self.collect_console()
             severe = [e for e in self.console if e.get("level") == "SEVERE"

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 # Driven by ctest (see CMakeLists.txt). Fails with a message at the first step that goes wrong.
-# It is given the build folder and nothing of the source tree: everything after the install
-# comes from the prefix, as it does for a team (docs/plugins.md, "Out of tree").
+# It is given the build folder and, of the source tree, only a team's own plugin (TEAM_MECANUM_SRC:
+# the team's code, not ÜberSim's): everything ÜberSim provides comes from the prefix after the
+# install, as it does for a team (docs/plugins.md, "Out of tree").
 cmake_minimum_required(VERSION 3.22)
 
 function(run_step what)
@@ -126,5 +127,41 @@ execute_process(COMMAND ${CMAKE_COMMAND} -E env "UBERSIM_PLUGIN_PATH=${plugin_bu
 if(NOT rc EQUAL 3 OR NOT out MATCHES "typo-robot.yaml:6:3: .*max_sped")
   message(FATAL_ERROR "the typo was not reported as file:6:3 with the key (exit ${rc}):\n${out}${err}")
 endif()
+# 9. Next year's robot: a team's mecanum drive (wheel bodies, rollers at 45° through
+#    WheelSpec::roller_turn) built against the install alone, then checked the way docs/plugins.md
+#    tells a team to: the installed `ubersim validate-physics --robot` drives it forward, fast,
+#    sideways, diagonally and turning, and at its acceleration limit, against its own limits.
+set(mecanum_src "${WORK_DIR}/team_mecanum_src")
+set(mecanum_build "${WORK_DIR}/team_mecanum")
+file(COPY "${TEAM_MECANUM_SRC}/" DESTINATION "${mecanum_src}")
+run_step("configure team_mecanum" ${CMAKE_COMMAND} -S "${mecanum_src}" -B "${mecanum_build}"
+         -G "${GENERATOR}" ${isolated})
+run_step("build team_mecanum" ${CMAKE_COMMAND} --build "${mecanum_build}")
+file(WRITE "${WORK_DIR}/team-mecanum.yaml" "kind: robot\nname: team-mecanum\n"
+  "body: {mass: 2.3, radius: 0.09, height: 0.146, front_distance: 0.07, ground_clearance: 0.015,\n"
+  "       center_of_mass_height: 0.05}\n"
+  "drive:\n  plugin: team_mecanum\n  half_length: 0.0559\n  half_track: 0.0559\n  wheel_radius: 0.029\n"
+  "  limits: {max_speed: 2.5, max_accel: 2.5, max_brake: 5.0, max_angular_speed: 8.0,\n"
+  "           max_angular_accel: 40.0, max_angular_brake: 40.0}\n")
+execute_process(COMMAND "${ubersim}" validate-physics --robot "${WORK_DIR}/team-mecanum.yaml"
+                        --plugin-path "${mecanum_build}" --out "${WORK_DIR}/team-mecanum-report"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "validate-physics on the team's mecanum robot: exit ${rc}:\n${out}${err}")
+endif()
+set(out "${out}${err}")
+foreach(scenario team_mecanum_steady_velocity team_mecanum_acceleration)
+  if(NOT out MATCHES "ok +${scenario} [0-9]+/[0-9]+ in band")
+    message(FATAL_ERROR "validate-physics did not pass ${scenario}:\n${out}")
+  endif()
+endforeach()
+if(out MATCHES "non-holonomic")
+  message(FATAL_ERROR "the mecanum drive did not move sideways:\n${out}")
+endif()
+file(READ "${WORK_DIR}/team-mecanum-report/README.md" report)
+if(NOT report MATCHES "sideways")
+  message(FATAL_ERROR "the report has no sideways case:\n${report}")
+endif()
 message(STATUS "installed: package, template, .proto files and docs; template copied from the "
-               "install, built against it alone, listed, run and validated")
+               "install, built against it alone, listed, run and validated; a team's mecanum "
+               "drive built from the install and validated by the installed validate-physics")

@@ -10,6 +10,7 @@
 #include "delimited.hpp"
 #include "error_codes.hpp"
 #include "mapping.hpp"
+#include "ssl_simulation_custom_ubersim.pb.h"
 #include "sim_bridge.hpp"
 #include "ssl_simulation_config.pb.h"
 #include "ssl_simulation_custom_erforce.pb.h"
@@ -493,12 +494,21 @@ TEST(SslSimulationMapping, ABadRobotCommandSkipsThatRobotOnly) {
 }
 
 TEST(SslSimulationMapping, ResponseHasFeedbackForEachCommandedRobot) {
-  auto contact = [](const RobotId& id) -> std::optional<bool> {
+  auto report = [](const RobotId& id) -> std::optional<RobotReport> {
     if (SixEach(id) != Presence::kOnField) return std::nullopt;
-    return id.id == 2;
+    RobotReport r;
+    r.dribbler_ball_contact = id.id == 2;
+    if (id.id == 2) {
+      DriveFeedback d;
+      d.wheel_speeds = {10.5, -20.25, 30.0, -40.0};
+      d.local_velocity.linear = Vec3(1.5, -0.25, 0);
+      d.local_velocity.angular = Vec3(0, 0, 2.0);
+      r.drive = d;
+    }
+    return r;
   };
   const RobotControlResponse r = BuildRobotControlResponse(
-      {2, 3, 9}, Team::kBlue, contact, {WireError{codes::kUnknownRobot, "no robot blue 9"}});
+      {2, 3, 9}, Team::kBlue, report, {WireError{codes::kUnknownRobot, "no robot blue 9"}});
   ASSERT_EQ(r.feedback_size(), 2);
   EXPECT_EQ(r.feedback(0).id(), 2u);
   EXPECT_TRUE(r.feedback(0).dribbler_ball_contact());
@@ -508,6 +518,21 @@ TEST(SslSimulationMapping, ResponseHasFeedbackForEachCommandedRobot) {
   ASSERT_EQ(r.errors_size(), 1);
   EXPECT_EQ(r.errors(0).code(), codes::kUnknownRobot);
   EXPECT_TRUE(r.IsInitialized());
+
+  // The drive's measurements travel in custom, under ÜberSim's own message type.
+  ASSERT_TRUE(r.feedback(0).has_custom());
+  EXPECT_EQ(r.feedback(0).custom().type_url(), "type.googleapis.com/UberSimDriveFeedback");
+  UberSimDriveFeedback d;
+  ASSERT_TRUE(r.feedback(0).custom().UnpackTo(&d));
+  ASSERT_EQ(d.wheel_speeds_size(), 4);
+  EXPECT_FLOAT_EQ(d.wheel_speeds(0), 10.5f);
+  EXPECT_FLOAT_EQ(d.wheel_speeds(1), -20.25f);
+  EXPECT_FLOAT_EQ(d.wheel_speeds(3), -40.0f);
+  EXPECT_FLOAT_EQ(d.forward(), 1.5f);
+  EXPECT_FLOAT_EQ(d.left(), -0.25f);
+  EXPECT_FLOAT_EQ(d.angular(), 2.0f);
+  // A robot whose drive reports nothing (none, or switched off) sends no custom.
+  EXPECT_FALSE(r.feedback(1).has_custom());
 }
 
 TEST(SslSimulationMapping, ParseMessageKinds) {
@@ -631,11 +656,13 @@ TEST(SslSimulationBridge, KnowsRobotsAndStepLength) {
   SimBridge b;
   EXPECT_FALSE(b.HasState());
   EXPECT_EQ(b.StepNs(), 0);
-  EXPECT_FALSE(b.Contact(RobotId{Team::kBlue, 0}));
+  EXPECT_FALSE(b.Report(RobotId{Team::kBlue, 0}));
   b.OnPublish(Snap(5, true));
   EXPECT_TRUE(b.HasState());
   EXPECT_EQ(b.StepNs(), 1'000'000);
-  EXPECT_EQ(b.Contact(RobotId{Team::kBlue, 0}), std::optional<bool>(true));
+  ASSERT_TRUE(b.Report(RobotId{Team::kBlue, 0}));
+  EXPECT_TRUE(b.Report(RobotId{Team::kBlue, 0})->dribbler_ball_contact);
+  EXPECT_FALSE(b.Report(RobotId{Team::kBlue, 0})->drive);
   EXPECT_FALSE(b.Exists(RobotId{Team::kYellow, 0}));
 }
 

@@ -163,7 +163,15 @@ TEST(ViewerProtocol, TheStateMessageCarriesTheSampleFramesAndStatus) {
   r.y = -2;
   r.yaw = 0.5;
   r.contact = true;
+  r.has_drive = true;
+  r.wheel_speeds = {12.5, -7.25};
+  r.drive_forward = 0.75;
+  r.drive_left = -0.5;
+  r.drive_angular = 1.5;
   s.robots.push_back(r);
+  RobotSample without_drive;
+  without_drive.id = RobotId{Team::kYellow, 5};
+  s.robots.push_back(without_drive);
   VisionFrame f;
   f.camera_id = 2;
   f.frame_number = 99;
@@ -186,11 +194,21 @@ TEST(ViewerProtocol, TheStateMessageCarriesTheSampleFramesAndStatus) {
   EXPECT_DOUBLE_EQ(d["ball"]["x"].GetDouble(), 0.5);
   EXPECT_DOUBLE_EQ(d["ball"]["z"].GetDouble(), 0.1);
   EXPECT_TRUE(d["ball"]["vz"].IsNull()) << "JSON has no NaN: a broken value goes out as null";
-  ASSERT_EQ(d["robots"].Size(), 1u);
+  ASSERT_EQ(d["robots"].Size(), 2u);
   EXPECT_STREQ(d["robots"][0]["team"].GetString(), "yellow");
   EXPECT_EQ(d["robots"][0]["id"].GetInt(), 4);
   EXPECT_DOUBLE_EQ(d["robots"][0]["x"].GetDouble(), 1.25);
   EXPECT_TRUE(d["robots"][0]["contact"].GetBool());
+  // The drive's own measurements, for the page's robot panel; null for a robot without a drive.
+  const auto& drive = d["robots"][0]["drive"];
+  ASSERT_TRUE(drive.IsObject());
+  EXPECT_DOUBLE_EQ(drive["forward"].GetDouble(), 0.75);
+  EXPECT_DOUBLE_EQ(drive["left"].GetDouble(), -0.5);
+  EXPECT_DOUBLE_EQ(drive["angular"].GetDouble(), 1.5);
+  ASSERT_EQ(drive["wheels"].Size(), 2u);
+  EXPECT_DOUBLE_EQ(drive["wheels"][0].GetDouble(), 12.5);
+  EXPECT_DOUBLE_EQ(drive["wheels"][1].GetDouble(), -7.25);
+  EXPECT_TRUE(d["robots"][1]["drive"].IsNull());
   ASSERT_EQ(d["vision"].Size(), 1u);
   EXPECT_EQ(d["vision"][0]["camera"].GetInt(), 2);
   EXPECT_DOUBLE_EQ(d["vision"][0]["t_capture"].GetDouble(), 1.965);
@@ -494,6 +512,10 @@ TEST_F(ViewerWorld, APageSeesTheWorldAndItsCommandsReachTheKernel) {
     // The robots stand still at kick-off; the page lags the world by at most a few steps.
     EXPECT_NEAR(r["x"].GetDouble(), truth.robots[i].pose.position.x(), 1e-3);
     EXPECT_NEAR(r["y"].GetDouble(), truth.robots[i].pose.position.y(), 1e-3);
+    // Every Div B robot has an omni drive: four measured wheel speeds, standing still.
+    ASSERT_TRUE(r["drive"].IsObject()) << "robot " << i;
+    ASSERT_EQ(r["drive"]["wheels"].Size(), 4u);
+    EXPECT_NEAR(r["drive"]["forward"].GetDouble(), 0.0, 1e-2);
   }
   EXPECT_EQ(state["status"]["clients"].GetInt(), 1);
 

@@ -227,7 +227,16 @@ struct ModelLoader::Impl {
     }
     if (schema.empty()) return params;  // the plugin declares no schema: nothing to check
     const std::string label = "the schema of " + std::string(ToString(kind)) + " plugin '" + id + "'";
-    ValidateAgainstSchema(params, schema, label);
+    try {
+      ValidateAgainstSchema(params, schema, label);
+    } catch (const ModelError& e) {
+      // A team's first schema often lists `plugin` as required; the model file has it, so saying
+      // it is missing would send them looking in the wrong file.
+      if (e.reason().find("missing required key 'plugin'") == std::string::npos) throw;
+      throw ErrorAt(plugin_key, label + " requires a 'plugin' key, but `plugin:` names the plugin and is taken "
+                                        "out of the block before its schema sees it: remove \"plugin\" from the "
+                                        "schema's \"required\" (docs/plugins.md, Parameters)");
+    }
     return WithSchemaDefaults(params, schema, label);
   }
 

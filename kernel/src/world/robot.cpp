@@ -5,6 +5,7 @@
 #include <cmath>
 #include <exception>
 #include <map>
+#include <optional>
 
 #include "ubersim/error.hpp"
 #include "collision/upright_prism.hpp"
@@ -22,6 +23,13 @@ bool SurfaceFinite(const SurfaceMaterial& s) {
 void CollectJoints(const NodeImpl& node, std::vector<const JointImpl*>& out) {
   for (const auto& j : node.joints()) out.push_back(j.get());
   for (const auto& c : node.children()) CollectJoints(*c, out);
+}
+
+bool FeedbackFinite(const DriveFeedback& f) {
+  for (double w : f.wheel_speeds) {
+    if (!std::isfinite(w)) return false;
+  }
+  return f.local_velocity.linear.allFinite() && f.local_velocity.angular.allFinite();
 }
 
 constexpr const char* kNotStd = "threw an exception that is not a std::exception";
@@ -449,6 +457,16 @@ RobotState Robot::State() const {
       Queried(*p, "TouchesBall", [&] { s.dribbler_ball_contact = dribbler_->TouchesBall(); });
     } else if (p->kind == PluginKind::kKicker) {
       Queried(*p, "Ready", [&] { s.kicker_ready = kicker_->Ready(); });
+    } else if (p->kind == PluginKind::kDrive) {
+      std::optional<DriveFeedback> f;
+      Queried(*p, "Feedback", [&] { f = drive_->Feedback(); });
+      // What a drive reports goes out on the wire and into learners' arrays: a non-finite value
+      // is the drive's defect, switched off like one it left in the physics.
+      if (f && !FeedbackFinite(*f)) {
+        const_cast<Robot&>(*this).Fail(*p, "Feedback", "reported a non-finite wheel speed or velocity");
+      } else {
+        s.drive = std::move(f);
+      }
     }
   }
   return s;

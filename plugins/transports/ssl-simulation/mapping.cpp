@@ -8,6 +8,7 @@
 
 #include "error_codes.hpp"
 #include "ssl_simulation_custom_erforce.pb.h"
+#include "ssl_simulation_custom_ubersim.pb.h"
 #include "transport_common/wire_units.hpp"
 
 namespace ubersim::ssl_simulation {
@@ -489,16 +490,24 @@ std::vector<WireError> AnswerErrors(const Event& event, const EventAnswer& answe
 }
 
 RobotControlResponse BuildRobotControlResponse(const std::vector<std::uint32_t>& ids, Team team,
-                                               const ContactLookup& contact,
+                                               const RobotReportLookup& report,
                                                const std::vector<WireError>& errors) {
   RobotControlResponse r;
   for (std::uint32_t id : ids) {
-    const std::optional<bool> touching =
-        id > kMaxRobotId ? std::nullopt : contact(RobotId{team, static_cast<int>(id)});
-    if (!touching) continue;
+    const std::optional<RobotReport> robot =
+        id > kMaxRobotId ? std::nullopt : report(RobotId{team, static_cast<int>(id)});
+    if (!robot) continue;
     RobotFeedback* f = r.add_feedback();
     f->set_id(id);
-    f->set_dribbler_ball_contact(*touching);
+    f->set_dribbler_ball_contact(robot->dribbler_ball_contact);
+    if (robot->drive) {
+      UberSimDriveFeedback d;
+      for (double w : robot->drive->wheel_speeds) d.add_wheel_speeds(static_cast<float>(w));
+      d.set_forward(static_cast<float>(robot->drive->local_velocity.linear.x()));
+      d.set_left(static_cast<float>(robot->drive->local_velocity.linear.y()));
+      d.set_angular(static_cast<float>(robot->drive->local_velocity.angular.z()));
+      f->mutable_custom()->PackFrom(d);
+    }
   }
   AppendErrors(errors, r.mutable_errors());
   return r;

@@ -79,12 +79,19 @@ bool WantsAnswer(const Event& event);
 /// The SimulatorErrors of the world's answer to such an event, each with its stable code.
 std::vector<WireError> AnswerErrors(const Event& event, const EventAnswer& answer);
 
-/// The state one robot's feedback needs; nullopt when the robot is unknown.
-using ContactLookup = std::function<std::optional<bool>(const RobotId&)>;
+/// What one robot's RobotFeedback carries: its dribbler contact and what its drive measured.
+struct RobotReport {
+  bool dribbler_ball_contact = false;  ///< the dribbler touches the ball
+  std::optional<DriveFeedback> drive;  ///< none without a working drive
+};
 
-/// Feedback for each commanded robot on the field (dribbler_ball_contact), plus the errors.
+/// The state one robot's feedback needs; nullopt when the robot is not on the field.
+using RobotReportLookup = std::function<std::optional<RobotReport>(const RobotId&)>;
+
+/// Feedback for each commanded robot on the field (dribbler_ball_contact, and the drive's
+/// measurements as an UberSimDriveFeedback in custom), plus the errors.
 RobotControlResponse BuildRobotControlResponse(const std::vector<std::uint32_t>& ids, Team team,
-                                               const ContactLookup& contact,
+                                               const RobotReportLookup& report,
                                                const std::vector<WireError>& errors);
 
 /// Appends errors to a repeated SimulatorError field.

@@ -14,7 +14,20 @@ void SimBridge::OnPublish(const WorldSnapshot& snapshot) {
   std::lock_guard lock(mutex_);
   robots_.resize(snapshot.robots.size());
   for (std::size_t i = 0; i < snapshot.robots.size(); ++i) {
-    robots_[i] = RobotEntry{snapshot.robots[i].id, snapshot.robots[i].present, snapshot.robots[i].dribbler_ball_contact};
+    const RobotState& from = snapshot.robots[i];
+    RobotEntry& to = robots_[i];
+    to.id = from.id;
+    to.present = from.present;
+    to.report.dribbler_ball_contact = from.dribbler_ball_contact;
+    // Assigned into the kept entry, so the wheel speeds' storage is reused step after step.
+    if (!from.drive) {
+      to.report.drive.reset();
+    } else if (to.report.drive) {
+      to.report.drive->wheel_speeds.assign(from.drive->wheel_speeds.begin(), from.drive->wheel_speeds.end());
+      to.report.drive->local_velocity = from.drive->local_velocity;
+    } else {
+      to.report.drive = from.drive;
+    }
   }
   has_state_ = true;
   ball_radius_ = snapshot.ball.radius;
@@ -51,11 +64,11 @@ bool SimBridge::OnField(const RobotId& id) const {
   return r && r->present;
 }
 
-std::optional<bool> SimBridge::Contact(const RobotId& id) const {
+std::optional<RobotReport> SimBridge::Report(const RobotId& id) const {
   std::lock_guard lock(mutex_);
   const RobotEntry* r = Find(id);
   if (!r || !r->present) return std::nullopt;
-  return r->contact;
+  return r->report;
 }
 
 double SimBridge::BallRadius() const {

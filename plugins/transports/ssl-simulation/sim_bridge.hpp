@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // What the transport's network threads learn from the simulation thread: the robots that exist,
-// their dribbler contact, the step length, and (for synchronous mode) the camera frames that
+// their dribbler contact and drive feedback, the step length, and (for synchronous mode) the camera frames that
 // leave the perception pipeline while a requested number of steps runs.
 #pragma once
 
@@ -12,6 +12,8 @@
 #include <vector>
 
 #include <ubersim/world_state.hpp>
+
+#include "mapping.hpp"
 
 namespace ubersim::ssl_simulation {
 
@@ -38,8 +40,9 @@ class SimBridge {
   bool Exists(const RobotId& id) const;
   /// Whether the robot is on the field (false before any state).
   bool OnField(const RobotId& id) const;
-  /// The robot's dribbler contact; nullopt when it is not on the field or no state is known yet.
-  std::optional<bool> Contact(const RobotId& id) const;
+  /// The robot's dribbler contact and drive feedback; nullopt when it is not on the field or no
+  /// state is known yet.
+  std::optional<RobotReport> Report(const RobotId& id) const;
   /// Ball radius, m (the kernel default until a state is known).
   double BallRadius() const;
   /// Length of a physics step, ns; 0 until a step has been published.
@@ -57,7 +60,7 @@ class SimBridge {
   struct RobotEntry {
     RobotId id;
     bool present = true;
-    bool contact = false;
+    RobotReport report;
   };
   const RobotEntry* Find(const RobotId& id) const;  // under mutex_
   mutable std::mutex mutex_;

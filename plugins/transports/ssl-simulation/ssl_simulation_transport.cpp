@@ -206,9 +206,9 @@ class SslSimulationTransport final : public Transport {
     return found.wait_for(500ms) == std::future_status::ready ? found.get() : Presence::kAbsent;
   }
 
-  std::optional<bool> Contact(const RobotId& id) {
-    if (bridge_.HasState()) return bridge_.Contact(id);
-    return Where(id) == Presence::kOnField ? std::optional<bool>(false) : std::nullopt;
+  std::optional<RobotReport> Report(const RobotId& id) {
+    if (bridge_.HasState()) return bridge_.Report(id);
+    return Where(id) == Presence::kOnField ? std::optional<RobotReport>(RobotReport{}) : std::nullopt;
   }
 
   MappingOptions Options() const {
@@ -281,7 +281,7 @@ class SslSimulationTransport final : public Transport {
     MappedRobotControl m = MapRobotControl(control, team, [this](const RobotId& id) { return Where(id); }, Options());
     CountRefused(port, m.errors);
     Post(m.events, m.errors);
-    return BuildRobotControlResponse(m.commanded_ids, team, [this](const RobotId& id) { return Contact(id); },
+    return BuildRobotControlResponse(m.commanded_ids, team, [this](const RobotId& id) { return Report(id); },
                                      m.errors)
         .SerializeAsString();
   }
@@ -334,7 +334,7 @@ class SslSimulationTransport final : public Transport {
       for (const VisionFrame& f : frames) *response.add_detection() = ToDetectionFrame(f);
     }
     *response.mutable_robot_control_response() =
-        BuildRobotControlResponse(ids, sync_.team, [this](const RobotId& id) { return Contact(id); }, errors);
+        BuildRobotControlResponse(ids, sync_.team, [this](const RobotId& id) { return Report(id); }, errors);
     return response;
   }
 

@@ -206,6 +206,15 @@ void SampleSnapshot(const WorldSnapshot& s, WorldSample& out) {
     o.kicker_ready = r.kicker_ready;
     o.radius = r.radius;
     o.height = r.height;
+    o.has_drive = r.drive.has_value();
+    if (r.drive) {  // assigned, so the storage is reused from one sample to the next
+      o.wheel_speeds.assign(r.drive->wheel_speeds.begin(), r.drive->wheel_speeds.end());
+      o.drive_forward = r.drive->local_velocity.linear.x();
+      o.drive_left = r.drive->local_velocity.linear.y();
+      o.drive_angular = r.drive->local_velocity.angular.z();
+    } else {
+      o.wheel_speeds.clear();
+    }
   }
 }
 
@@ -285,6 +294,21 @@ std::string EncodeState(const WorldSample& s, const std::vector<VisionFrame>& fr
     w.Bool(r.kicker_ready);
     Number(w, "r", r.radius);
     Number(w, "h", r.height);
+    // What the drive measured of itself (Drive::Feedback), or null without a working drive.
+    w.Key("drive");
+    if (r.has_drive) {
+      w.StartObject();
+      Number(w, "forward", r.drive_forward);
+      Number(w, "left", r.drive_left);
+      Number(w, "angular", r.drive_angular);
+      w.Key("wheels");
+      w.StartArray();
+      for (double speed : r.wheel_speeds) w.Double(speed);  // finite: the kernel checks feedback
+      w.EndArray();
+      w.EndObject();
+    } else {
+      w.Null();
+    }
     w.EndObject();
   }
   w.EndArray();

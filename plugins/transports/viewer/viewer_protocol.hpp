@@ -23,6 +23,9 @@ struct RobotSample {
   bool contact = false;          ///< dribbler touches the ball
   bool kicker_ready = false;     ///< kicker charged
   double radius = 0.09, height = 0.15;  ///< m
+  bool has_drive = false;        ///< the drive reported (the fields below are valid)
+  std::vector<double> wheel_speeds;  ///< the drive's measured wheel speeds, rad/s
+  double drive_forward = 0, drive_left = 0, drive_angular = 0;  ///< its measured velocity, robot frame
 
   /// Takes pose and velocity (a snapshot's, or a query's answer while paused).
   void SetMotion(const Pose& pose, const Twist& twist) {

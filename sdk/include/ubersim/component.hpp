@@ -12,6 +12,7 @@
 #include "ubersim/math.hpp"
 #include "ubersim/params.hpp"
 #include "ubersim/scene.hpp"
+#include "ubersim/world_state.hpp"
 
 namespace ubersim {
 inline namespace v1 {
@@ -97,12 +98,6 @@ class UBERSIM_SDK_API Component {
   virtual std::string SaveState() const { return {}; }
   /// Restores what SaveState returned.
   virtual void RestoreState(std::string_view /*state*/) {}
-};
-
-/// What a drive reports back.
-struct DriveFeedback {
-  std::vector<double> wheel_speeds;  ///< measured wheel speeds, rad/s
-  Twist local_velocity;              ///< measured chassis velocity in the robot frame
 };
 
 /// Turns move commands into motion (omni wheels, differential, …).

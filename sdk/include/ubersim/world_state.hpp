@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,12 @@
 
 namespace ubersim {
 inline namespace v1 {
+
+/// What a drive measures of itself, as a real robot's firmware would report it.
+struct DriveFeedback {
+  std::vector<double> wheel_speeds;  ///< measured wheel speeds, rad/s, in the drive's wheel order
+  Twist local_velocity;              ///< measured chassis velocity in the robot frame (x forward, y left)
+};
 
 /// Ground truth of one robot after a step.
 struct RobotState {
@@ -21,6 +28,7 @@ struct RobotState {
   bool kicker_ready = false;      ///< the kicker is charged
   double radius = 0.09;           ///< m
   double height = 0.15;           ///< m
+  std::optional<DriveFeedback> drive;  ///< the drive's Feedback(); none off the field or without a working drive
 };
 
 /// Ground truth of the ball after a step.

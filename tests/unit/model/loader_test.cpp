@@ -581,6 +581,20 @@ TEST_F(Loader, PluginParametersFailThePluginsSchema) {
   EXPECT_NO_THROW(unchecked.LoadRobot(typo));
 }
 
+TEST_F(Loader, APluginSchemaThatRequiresThePluginKeyIsCalledOut) {
+  // `plugin:` is taken out before the plugin's schema sees the block: "missing 'plugin'" would
+  // send the team to its model file, where the key is.
+  const PluginSchemaLookup wants_plugin = [](PluginKind, const std::string&) {
+    return std::string(R"({"type": "object", "required": ["plugin"]})");
+  };
+  const ModelLoader loader(kSchemas, wants_plugin);
+  const auto robot = Write("r.yaml", kRobot);
+  Expect(ErrorOf([&] { loader.LoadRobot(robot); }), robot, 5, 3, "drive.plugin",
+         "the schema of drive plugin 'omni' requires a 'plugin' key, but `plugin:` names the plugin and is "
+         "taken out of the block before its schema sees it: remove \"plugin\" from the schema's \"required\" "
+         "(docs/plugins.md, Parameters)");
+}
+
 TEST_F(Loader, SizesThatDoNotFitTogether) {
   const auto narrow = Write("f.yaml", Replace(kField, "field_width: 6.0\n", "field_width: 0.9\n"));
   Expect(ErrorOf([&] { loader_.LoadField(narrow); }), narrow, 10, 3, "goal.width",

@@ -41,7 +41,17 @@ class PushDrive final : public Drive {
     if (!local) throw PluginError("PushDrive takes local velocities only");
     target_ = Vec3(local->forward, local->left, 0);
   }
-  DriveFeedback Feedback() const override { return {}; }
+  // The chassis velocity in the robot frame and one made-up wheel speed, or a defect on request.
+  DriveFeedback Feedback() const override {
+    if (feedback_defect_ == Defect::kThrow) throw std::runtime_error("encoder bus timed out");
+    DriveFeedback f;
+    const Body& c = ctx_->Chassis();
+    f.local_velocity.linear = c.GetPose().orientation.inverse() * c.GetTwist().linear;
+    f.wheel_speeds = {feedback_defect_ == Defect::kNaN ? std::nan("") : 42.0};
+    return f;
+  }
+  enum class Defect { kNone, kThrow, kNaN };
+  static Defect feedback_defect_;
   void PreStep(const StepInfo&) override {
     if (throw_in_prestep_) throw std::runtime_error("motor controller exploded");
     Body& c = ctx_->Chassis();
@@ -59,6 +69,7 @@ class PushDrive final : public Drive {
   Vec3 target_ = Vec3::Zero();
 };
 bool PushDrive::throw_in_prestep_ = false;
+PushDrive::Defect PushDrive::feedback_defect_ = PushDrive::Defect::kNone;
 
 void* CreatePushDrive() { return static_cast<Drive*>(new PushDrive()); }
 void DestroyPushDrive(void* p) { delete static_cast<Drive*>(p); }
@@ -177,6 +188,44 @@ TEST(Robot, APartThatThrowsWhileSteppingIsSwitchedOffAndTheWorldGoesOn) {
             std::string::npos)
       << log;
   EXPECT_EQ(f.log.count(LogLevel::kError), 1);  // reported once, not every step
+}
+
+TEST(Robot, TheDrivesFeedbackIsInTheGroundTruth) {
+  Fixture f;
+  World world(OneRobotWorld(), f.registry, f.log, false);
+  world.events().Post(CommandEvent{{Team::kBlue, 3}, LocalVelocityCommand{0.0, 0.5, 0.0}, {}, {}});
+  for (int i = 0; i < 500; ++i) world.Step();
+  const RobotState r = world.GroundTruth().robots[0];
+  ASSERT_TRUE(r.drive);
+  EXPECT_EQ(r.drive->wheel_speeds, std::vector<double>{42.0});
+  EXPECT_NEAR(r.drive->local_velocity.linear.y(), 0.5, 0.02);  // what the drive measured
+  EXPECT_NEAR(r.drive->local_velocity.linear.x(), 0.0, 0.02);
+
+  // Off the field a robot reports nothing.
+  world.events().Post(PositionEvent{Target::Robot({Team::kBlue, 3}), std::nullopt, std::nullopt,
+                                    std::nullopt, std::nullopt, false});
+  world.ProcessEvents();
+  EXPECT_FALSE(world.GroundTruth().robots[0].drive);
+}
+
+TEST(Robot, ADriveWhoseFeedbackThrowsOrIsNotFiniteIsSwitchedOff) {
+  for (PushDrive::Defect defect : {PushDrive::Defect::kThrow, PushDrive::Defect::kNaN}) {
+    Fixture f;
+    WorldModel model = OneRobotWorld();
+    model.on_plugin_fault = "disable";
+    World world(model, f.registry, f.log, false);
+    PushDrive::feedback_defect_ = defect;
+    const WorldSnapshot s = world.GroundTruth();
+    PushDrive::feedback_defect_ = PushDrive::Defect::kNone;
+    EXPECT_FALSE(s.robots[0].drive);
+    ASSERT_EQ(world.faults().size(), 1u);
+    EXPECT_EQ(world.faults()[0].phase, "Feedback");
+    const std::string why = defect == PushDrive::Defect::kThrow ? "threw std::runtime_error: encoder bus timed out"
+                                                                 : "reported a non-finite wheel speed or velocity";
+    EXPECT_EQ(world.faults()[0].what, why);
+    EXPECT_FALSE(world.GroundTruth().robots[0].drive) << "switched off: asked no more";
+    EXPECT_EQ(world.faults().size(), 1u);
+  }
 }
 
 TEST(Robot, PlacingTheSameRobotTwiceIsRefused) {

@@ -31,7 +31,7 @@
   let dpr = 1;
 
   const api = {
-    connected: false, hello: null, state: null, drawn: null, frames: 0,
+    connected: false, hello: null, state: null, drawn: null, frames: 0, selected: null,
     fieldToClient, clientToField, send,
     render: () => requestRender(),
   };
@@ -114,6 +114,7 @@
     api.state = s;
     recordTrails(s);
     updateStatus(s);
+    updatePanel(s);
     // A paused simulation keeps sending the same state: redraw only when something moved.
     const frames = Array.isArray(s.vision) ? s.vision.map((v) => v && v.frame) : [];
     const sig = `${s.step}|${JSON.stringify(s.ball)}|${JSON.stringify(s.robots)}|${frames}`;
@@ -168,6 +169,64 @@
     clearTimeout(errorTimer);
     errorTimer = setTimeout(() => el.classList.add('old'), 6000);  // stays as "last error", dimmed
   }
+
+  // ---------------------------------------------------------------- robot panel
+
+  // A clicked robot's truth and what its drive measured of itself (Drive::Feedback): what the
+  // robot's own firmware would report, beside what is really there.
+  let selected = null;  // robotKey of the robot shown in the panel, or null
+  // Values that round to zero read 0, not -0.
+  const fmt = (v, digits) => (Number.isFinite(v) ? (Math.abs(v) < 0.5 * 10 ** -digits ? 0 : v).toFixed(digits) : '–');
+  const deg = (rad) => (Number.isFinite(rad) ? (rad * 180 / Math.PI).toFixed(1) : '–');
+
+  function select(key) {
+    selected = key;
+    api.selected = key;
+    if (api.state) updatePanel(api.state);
+    requestRender();
+  }
+
+  function panelRows(r) {
+    const rows = [
+      ['position', `${fmt(r.x, 3)}, ${fmt(r.y, 3)} m`],
+      ['heading', `${deg(r.yaw)}°`],
+      ['velocity', `${fmt(r.vx, 2)}, ${fmt(r.vy, 2)} m/s · ${fmt(r.w, 2)} rad/s`],
+      ['dribbler', r.contact ? 'touches the ball' : 'no contact'],
+      ['kicker', r.kicker_ready ? 'charged' : 'not charged'],
+    ];
+    const d = r.drive;
+    if (d && typeof d === 'object') {
+      rows.push(['drive says', `${fmt(d.forward, 2)} fwd, ${fmt(d.left, 2)} left m/s · ${fmt(d.angular, 2)} rad/s`]);
+      const wheels = Array.isArray(d.wheels) ? d.wheels : [];
+      wheels.forEach((w, i) => rows.push([`wheel ${i + 1}`, `${fmt(w, 1)} rad/s`]));
+    } else {
+      rows.push(['drive says', 'nothing (no working drive)']);
+    }
+    return rows;
+  }
+
+  function updatePanel(s) {
+    const panel = $('robot-panel');
+    const robots = Array.isArray(s.robots) ? s.robots : [];
+    const r = selected ? robots.find((o) => o && robotKey(o) === selected && o.present !== false) : null;
+    if (!r) {
+      if (!panel.hidden) panel.hidden = true;
+      return;
+    }
+    setText('robot-panel-title', `${r.team} ${r.id}`);
+    const body = $('robot-panel-rows');
+    const rows = panelRows(r);
+    while (body.rows.length > rows.length) body.deleteRow(-1);
+    rows.forEach(([name, value], i) => {
+      const row = body.rows[i] || body.insertRow();
+      if (row.cells.length === 0) { row.insertCell(); row.insertCell(); }
+      if (row.cells[0].textContent !== name) row.cells[0].textContent = name;
+      if (row.cells[1].textContent !== value) row.cells[1].textContent = value;
+    });
+    if (panel.hidden) panel.hidden = false;
+  }
+
+  $('robot-panel-close').addEventListener('click', (e) => { select(null); e.currentTarget.blur(); });
 
   function togglePause() {
     const p = effectivePaused();
@@ -443,6 +502,15 @@
     const R = Math.max(5, (r.r > 0 ? r.r : 0.09) * view.s);
     const a = -yaw;  // screen angles turn the other way (y flipped)
     const team = TEAM_FILL[r.team] ? r.team : null;
+    if (selected === robotKey(r)) {  // the robot the panel shows
+      ctx.strokeStyle = '#ffffff';
+      ctx.lineWidth = 1.5;
+      ctx.setLineDash([4, 3]);
+      ctx.beginPath();
+      ctx.arc(p.x, p.y, R + 7, 0, 2 * Math.PI);
+      ctx.stroke();
+      ctx.setLineDash([]);
+    }
     if (r.contact) {
       ctx.strokeStyle = CONTACT;
       ctx.lineWidth = 2.5;
@@ -657,7 +725,10 @@
   canvas.addEventListener('pointerdown', (e) => {
     if (drag || (e.button !== 0 && e.button !== 2)) return;
     const hit = hitTest(e.clientX, e.clientY, e.pointerType);
-    if (!hit) return;  // clicks elsewhere do nothing
+    if (!hit) {  // a click on the carpet closes the robot panel, and does nothing else
+      if (e.button === 0 && selected) select(null);
+      return;
+    }
     const kick = hit.kind === 'ball' && (e.button === 2 || e.shiftKey || $('kick-mode').checked);
     if (!kick && e.button === 2) return;
     const p = pointerField(e);
@@ -710,6 +781,8 @@
       sendMove(d);  // the final point, always
       settle = { kind: d.kind, key: d.key, x: d.x, y: d.y, yaw: d.yaw, until: performance.now() + SETTLE_MS };
       setTimeout(requestRender, SETTLE_MS + 20);
+    } else if (d.kind === 'robot' && !cancelled) {
+      select(selected === d.key ? null : d.key);  // a click, not a drag: show (or hide) its panel
     }
     drag = null;
     canvas.className = '';
