@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <string>
 
 #include "scenario_world.hpp"
@@ -36,14 +37,19 @@ std::string Which(const OmniModel& m) {
   return std::string("models/") + m.file + (IsWheelBody(m) ? "" : std::string(", the ") + m.drive + " drive");
 }
 
+// The robot as the setup text names it.
+std::string Subject(const OmniModel& m) {
+  if (!m.subject.empty()) return m.subject;
+  return "The modern four-wheel robot (" + Which(m) + ": wheels at 60°, 135°, 225°, 300°)";
+}
+
 }  // namespace
 
 ScenarioResult OmniSteadyVelocity(const Environment& env, const OmniModel& model) {
   ScenarioResult r;
   r.id = std::string(model.drive) + "_steady_velocity";
   r.title = RobotName(model) + ": steady speed follows the command";
-  r.setup = "The modern four-wheel robot (" + Which(model) + ": wheels at 60°, 135°, 225°, "
-            "300°) alone on the Div B field gets a local velocity command at 100 Hz for 1.5 s; the "
+  r.setup = Subject(model) + " alone on the Div B field gets a local velocity command at 100 Hz for 1.5 s; the "
             "measured velocity (ground truth, robot frame) is averaged over the next 0.5 s. Each metric "
             "is the measured over the commanded value.";
   struct Case { const char* name; double forward, left, angular; };
@@ -96,10 +102,13 @@ ScenarioResult OmniAcceleration(const Environment& env, const OmniModel& model) 
   ScenarioResult r;
   r.id = std::string(model.drive) + "_acceleration";
   r.title = RobotName(model) + ": speed-up follows the acceleration limit";
-  r.setup = "The modern four-wheel robot (" +
-            (IsWheelBody(model) ? std::string() : Which(model) + "; ") +
-            (model.name.empty() ? std::string("limit 3 m/s², physics.md §3c)")
-                                : "its limit " + std::to_string(model.max_accel) + " m/s²)") +
+  std::ostringstream limit;
+  limit << model.max_accel;
+  r.setup = (model.subject.empty() ? "The modern four-wheel robot (" +
+                                         (IsWheelBody(model) ? std::string() : Which(model) + "; ") +
+                                         (model.name.empty() ? std::string("limit 3 m/s², physics.md §3c)")
+                                                             : "its limit " + limit.str() + " m/s²)")
+                                   : model.subject + ", its limit " + limit.str() + " m/s²,") +
             " is commanded two thirds of its top speed forward from "
             "rest; the slope of measured speed over time between 20 % and 80 % of the target is fitted.";
   Bench bench(env, OneRobot(env, "worlds/div-b.yaml", model.file));
@@ -176,6 +185,7 @@ OmniModel RobotUnderTest(const kernel::RobotModel& robot, const std::filesystem:
   std::replace(m.drive.begin(), m.drive.end(), '-', '_');
   m.file = std::filesystem::absolute(file).lexically_normal().string();
   m.name = "Robot " + robot.name;
+  m.subject = "The robot " + robot.name + " (" + m.file + ")";
   if (robot.drive) {
     const ParamView& p = robot.drive->params;
     if (p.Has("limits")) {

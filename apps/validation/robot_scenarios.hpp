@@ -19,13 +19,16 @@ struct OmniModel {
   double max_accel = 3.0;          ///< m/s², the drive's limits.max_accel
   double max_angular_speed = 10.0; ///< rad/s, the drive's limits.max_angular_speed
   std::string name;                ///< in titles; empty: "Omni robot"
+  std::string subject;             ///< how the setup text names it; empty: the modern four-wheel robot
 };
 /// The modern four-wheel robot on the omni drive: a body per wheel on a motorised hinge.
 inline const OmniModel kWheelBodyOmni{"omni", "robots/ssl-omni-2026.yaml"};
 /// The same robot on the omni_force drive: one rigid body, the wheel forces applied to it.
 inline const OmniModel kForceOmni{"omni_force", "robots/ssl-omni-2026-force.yaml"};
 /// The same body on four mecanum wheels, rollers at 45° to the axles.
-inline const OmniModel kMecanum{"mecanum", "robots/ssl-mecanum-2026.yaml", 3.0, 3.0, 10.0, "Mecanum robot"};
+inline const OmniModel kMecanum{"mecanum", "robots/ssl-mecanum-2026.yaml", 3.0, 3.0, 10.0, "Mecanum robot",
+                                "The mecanum robot (models/robots/ssl-mecanum-2026.yaml: wheels at the corners, "
+                                "rollers at 45° to the axles)"};
 
 /// The modern four-wheel omni robot holds commanded velocities: forward, sideways, diagonal, turning.
 ScenarioResult OmniSteadyVelocity(const Environment& env, const OmniModel& model = kWheelBodyOmni);

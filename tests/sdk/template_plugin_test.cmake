@@ -162,6 +162,10 @@ file(READ "${WORK_DIR}/team-mecanum-report/README.md" report)
 if(NOT report MATCHES "sideways")
   message(FATAL_ERROR "the report has no sideways case:\n${report}")
 endif()
+# The report describes the team's robot, not a shipped one.
+if(NOT report MATCHES "The robot team-mecanum \\(" OR report MATCHES "wheels at 60°")
+  message(FATAL_ERROR "the report does not describe the team's robot:\n${report}")
+endif()
 message(STATUS "installed: package, template, .proto files and docs; template copied from the "
                "install, built against it alone, listed, run and validated; a team's mecanum "
                "drive built from the install and validated by the installed validate-physics")
