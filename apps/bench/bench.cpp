@@ -46,6 +46,7 @@ std::vector<BenchResult> RunBench(const BenchOptions& options, PluginRegistry& r
     r.world = model.name;
     r.file = file.string();
     r.robots = static_cast<int>(model.robots.size());
+    r.profile = model.physics.profile;
     r.physics_step = model.physics.step;
     r.solver_iterations = model.physics.solver_iterations;
     r.solver_iterations_without_ball = model.physics.IterationsWithoutBall();
@@ -132,8 +133,8 @@ std::string Fixed1(double x) {
 std::string FormatTable(const std::vector<BenchResult>& results) {
   std::ostringstream out;
   char line[512];
-  std::snprintf(line, sizeof line, "%-10s %6s %7s %5s %9s %10s %8s | %6s %6s %6s %6s %6s %6s %6s | %8s | %9s %9s\n",
-                "world", "robots", "step ms", "iter", "real-time", "steps/s", "µs/step", "coll", "ode",
+  std::snprintf(line, sizeof line, "%-10s %-8s %6s %7s %5s %9s %10s %8s | %6s %6s %6s %6s %6s %6s %6s | %8s | %9s %9s\n",
+                "world", "profile", "robots", "step ms", "iter", "real-time", "steps/s", "µs/step", "coll", "ode",
                 "plugin", "percep", "transp", "events", "other", "peak MB", "bare ODE", "overhead");
   out << line;
   for (const BenchResult& r : results) {
@@ -144,8 +145,8 @@ std::string FormatTable(const std::vector<BenchResult>& results) {
       std::snprintf(overhead, sizeof overhead, "%+.1f %%", 100.0 * r.kernel_overhead);
     }
     std::snprintf(line, sizeof line,
-                  "%-10s %6d %7.2f %5s %8.1f× %10.0f %8.1f | %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% | %8.1f | %9s %9s\n",
-                  r.world.c_str(), r.robots, r.physics_step * 1e3, r.Iterations().c_str(), r.real_time_factor,
+                  "%-10s %-8s %6d %7.2f %5s %8.1f× %10.0f %8.1f | %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% %5.1f%% | %8.1f | %9s %9s\n",
+                  r.world.c_str(), r.profile.c_str(), r.robots, r.physics_step * 1e3, r.Iterations().c_str(), r.real_time_factor,
                   r.steps_per_second, r.step_microseconds, 100 * r.split.collision, 100 * r.split.physics,
                   100 * r.split.plugins, 100 * r.split.perception, 100 * r.split.transports, 100 * r.split.events,
                   100 * r.split.other,
@@ -168,8 +169,8 @@ std::string FormatMarkdown(const std::vector<BenchResult>& results, const std::s
                            const std::string& command) {
   std::ostringstream out;
   out << "Machine: " << machine << "\n\nCommand: `" << command << "`\n\n";
-  out << "| world | robots | bodies / geoms / joints | step | iterations | contacts per pair | real-time factor | steps/s | collision | ODE step | plugins | perception | transports | events | other | peak memory | bare ODE | kernel overhead |\n";
-  out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  out << "| world | profile | robots | bodies / geoms / joints | step | iterations | contacts per pair | real-time factor | steps/s | collision | ODE step | plugins | perception | transports | events | other | peak memory | bare ODE | kernel overhead |\n";
+  out << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   char line[1024];
   for (const BenchResult& r : results) {
     char baseline[64] = "-";
@@ -179,9 +180,9 @@ std::string FormatMarkdown(const std::vector<BenchResult>& results, const std::s
       std::snprintf(overhead, sizeof overhead, "%+.0f %%", 100.0 * r.kernel_overhead);
     }
     std::snprintf(line, sizeof line,
-                  "| %s | %d | %d / %d / %d | %.2f ms | %s | %d | **%.1f×** | %.0f | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.1f MB | %s | %s |\n",
-                  r.world.c_str(), r.robots, r.bodies, r.geoms, r.joints, r.physics_step * 1e3, r.Iterations().c_str(),
-                  r.max_contacts, r.real_time_factor, r.steps_per_second, 100 * r.split.collision,
+                  "| %s | %s | %d | %d / %d / %d | %.2f ms | %s | %d | **%.1f×** | %.0f | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.0f %% | %.1f MB | %s | %s |\n",
+                  r.world.c_str(), r.profile.c_str(), r.robots, r.bodies, r.geoms, r.joints, r.physics_step * 1e3,
+                  r.Iterations().c_str(), r.max_contacts, r.real_time_factor, r.steps_per_second, 100 * r.split.collision,
                   100 * r.split.physics, 100 * r.split.plugins, 100 * r.split.perception, 100 * r.split.transports,
                   100 * r.split.events,
                   100 * r.split.other, r.rss_peak_mb, baseline, overhead);

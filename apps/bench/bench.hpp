@@ -51,6 +51,7 @@ struct BenchResult {
   std::string world;           ///< world name
   std::string file;            ///< world file
   int robots = 0;              ///< robots on the field
+  std::string profile;         ///< physics profile in force (precise, fast)
   double physics_step = 0;     ///< s
   int solver_iterations = 0;   ///< QuickStep iterations (islands with the ball)
   int solver_iterations_without_ball = 0;  ///< QuickStep iterations of the other islands

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "command_line.hpp"
 
+#include <algorithm>
 #include <iostream>
 
 #include "exit_codes.hpp"
@@ -40,7 +41,11 @@ std::string CommandLineText(const std::string& command, const std::vector<std::s
 }
 
 void PhysicsFlags::AddTo(po::options_description& desc) {
+  std::string names;
+  for (const std::string& n : kernel::PhysicsProfileNames()) names += (names.empty() ? "" : ", ") + n;
   desc.add_options()
+      ("profile", po::value<std::string>(&profile),
+       ("physics profile instead of the world files' (" + names + "); keys a world file sets itself still apply").c_str())
       ("physics-step", po::value<double>(&step), "instead of the world files' physics step, s")
       ("solver-iterations", po::value<int>(&iterations), "instead of the world files' QuickStep iterations")
       ("solver-iterations-without-ball", po::value<int>(&iterations_without_ball),
@@ -48,15 +53,30 @@ void PhysicsFlags::AddTo(po::options_description& desc) {
       ("max-contacts", po::value<int>(&contacts), "instead of the world files' contacts per geometry pair");
 }
 
-bool PhysicsFlags::Read(const po::variables_map& vm, const std::string& command, kernel::PhysicsOverrides& out) const {
+std::optional<std::string> PhysicsFlags::Problem(const po::variables_map& vm) const {
+  if (vm.count("profile")) {
+    const auto& names = kernel::PhysicsProfileNames();
+    if (std::find(names.begin(), names.end(), profile) == names.end()) {
+      std::string list;
+      for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+      return "no physics profile '" + profile + "' (there are: " + list + ")";
+    }
+  }
   if ((vm.count("physics-step") && !(step > 0 && step <= 0.02)) || (vm.count("solver-iterations") && iterations < 1) ||
       (vm.count("solver-iterations-without-ball") && iterations_without_ball < 1) ||
       (vm.count("max-contacts") && (contacts < 1 || contacts > 16))) {
-    std::cerr << "ubersim " << command
-              << ": 0 < --physics-step <= 0.02, --solver-iterations >= 1, --solver-iterations-without-ball >= 1, "
-                 "--max-contacts 1..16\n";
+    return "0 < --physics-step <= 0.02, --solver-iterations >= 1, --solver-iterations-without-ball >= 1, "
+           "--max-contacts 1..16";
+  }
+  return std::nullopt;
+}
+
+bool PhysicsFlags::Read(const po::variables_map& vm, const std::string& command, kernel::PhysicsOverrides& out) const {
+  if (const auto why = Problem(vm)) {
+    std::cerr << "ubersim " << command << ": " << *why << "\n";
     return false;
   }
+  if (vm.count("profile")) out.profile = profile;
   if (vm.count("physics-step")) out.step = step;
   if (vm.count("solver-iterations")) out.solver_iterations = iterations;
   if (vm.count("solver-iterations-without-ball")) out.solver_iterations_without_ball = iterations_without_ball;

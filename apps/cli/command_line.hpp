@@ -25,16 +25,20 @@ std::optional<int> ParseCommandLine(const std::vector<std::string>& args, const 
 /// "ubersim COMMAND ARGS…": the command line as typed, for reports.
 std::string CommandLineText(const std::string& command, const std::vector<std::string>& args);
 
-/// --physics-step, --solver-iterations, --solver-iterations-without-ball, --max-contacts: one
-/// meaning and one check for every command that tries other physics settings than the world files'.
+/// --profile, --physics-step, --solver-iterations, --solver-iterations-without-ball,
+/// --max-contacts: one meaning and one check for every command that tries other physics settings
+/// than the world files'.
 struct PhysicsFlags {
+  std::string profile;              ///< --profile
   double step = 0;                  ///< --physics-step
   int iterations = 0;               ///< --solver-iterations
   int iterations_without_ball = 0;  ///< --solver-iterations-without-ball
   int contacts = 0;                 ///< --max-contacts
 
-  /// Adds the four flags to `desc`.
+  /// Adds the five flags to `desc`.
   void AddTo(boost::program_options::options_description& desc);
+  /// Why the flags given cannot be used (an unknown profile, a value out of range), or nothing.
+  std::optional<std::string> Problem(const boost::program_options::variables_map& vm) const;
   /// The settings given; false (with the reason on stderr) when one is out of range.
   bool Read(const boost::program_options::variables_map& vm, const std::string& command,
             kernel::PhysicsOverrides& out) const;

@@ -51,6 +51,7 @@ struct RunFlags {
   std::string restore_file, snapshot_out, crash_dir = ".";
   double crash_snapshot_interval = 1.0;
   RunOverrides overrides;
+  PhysicsFlags physics;
 };
 
 // The run's options, bound to `f`.
@@ -91,6 +92,7 @@ po::options_description RunOptionsOf(RunFlags& f) {
       ("crash-dir", po::value<std::string>(&f.crash_dir)->default_value("."), "where crash reports and their snapshots go")
       ("crash-snapshot-interval", po::value<double>(&f.crash_snapshot_interval)->default_value(1.0),
        "simulated seconds between the in-memory snapshots a crash report writes (0: none)");
+  f.physics.AddTo(desc);
   return desc;
 }
 
@@ -110,6 +112,10 @@ void ApplyFlags(RunFlags& f, const po::variables_map& vm, WorldModel& model, con
   for (const char* port : {"vision", "control", "blue", "yellow", "grsim", "viewer"}) {
     if (vm.count(std::string(port) + "-port")) f.overrides.ports[port] = vm[std::string(port) + "-port"].as<int>();
   }
+  kernel::PhysicsOverrides physics;
+  if (const auto why = f.physics.Problem(vm)) throw UsageError(*why);
+  f.physics.Read(vm, "run", physics);
+  physics.ApplyTo(model.physics);
   for (const std::string& note : ApplyRunOverrides(f.overrides, model, loading.loader, *loading.registry)) {
     std::cerr << "ubersim: " << note << "\n";
   }
@@ -125,8 +131,8 @@ void ApplyFlags(RunFlags& f, const po::variables_map& vm, WorldModel& model, con
 void PrintWorld(const WorldModel& model, const fs::path& world_file, const World& world) {
   std::cerr << "ubersim: world '" << model.name << "' from " << world_file.string() << ": "
             << model.robots.size() << " robots, field " << model.field->geometry.name
-            << ", ball " << model.ball->name << ", physics step "
-            << model.physics.step * 1e3 << " ms, broadphase " << model.physics.broadphase << "\n";
+            << ", ball " << model.ball->name << "\n";
+  std::cerr << "ubersim: physics " << DescribePhysics(model.physics) << "\n";
   const auto endpoints = world.TransportEndpoints();
   if (endpoints.empty()) std::cerr << "ubersim: publishing nowhere (the world file configures no transports)\n";
   for (const auto& e : endpoints) std::cerr << "ubersim: publishing " << e << "\n";

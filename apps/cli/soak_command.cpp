@@ -101,9 +101,9 @@ int SoakCommand(const std::vector<std::string>& args) {
   options.teleport_interval = interval;
   options.wall_overlap = wall_overlap;
   if (vm.count("log-teleports")) options.on_teleport = PrintTeleport;
-  std::printf("soak %s (%s): %.0f s simulated, seed %llu, %zu robots, physics step %.2f ms\n", model.name.c_str(),
+  std::printf("soak %s (%s): %.0f s simulated, seed %llu, %zu robots, physics %s\n", model.name.c_str(),
               file.string().c_str(), duration, static_cast<unsigned long long>(seed), model.robots.size(),
-              model.physics.step * 1e3);
+              DescribePhysics(model.physics).c_str());
   std::fflush(stdout);
   ProgressLine progress(/*shown=*/vm.count("quiet") == 0);
   double next_line = 0;  // off a terminal, one line a simulated minute

@@ -187,7 +187,7 @@ TEST_F(BenchWorld, ARunReportsItsSplitAndTheBaseline) {
   const std::string table = FormatTable(results);
   EXPECT_NE(table.find("ssl-2003"), std::string::npos) << table;
   const std::string md = FormatMarkdown(results, "test machine", "ubersim bench");
-  EXPECT_NE(md.find("| ssl-2003 | 10 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| ssl-2003 | precise | 10 |"), std::string::npos) << md;
 }
 
 }  // namespace

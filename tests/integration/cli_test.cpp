@@ -183,7 +183,7 @@ TEST(Cli, BenchPrintsEachWorldWithItsBaselineAndRefusesBadOptions) {
   const Result r = RunUbersim("bench ssl-2003 --duration 0.05 --physics-step 0.002 --markdown " +
                               (TempDir() / "bench.md").string());
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("ssl-2003       10    2.00"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ssl-2003   precise      10    2.00"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("machine: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("bench.md"), std::string::npos) << r.output;
   const Result bad = RunUbersim("bench --physics-step 0.5");
@@ -198,6 +198,32 @@ TEST(Cli, BenchPrintsEachWorldWithItsBaselineAndRefusesBadOptions) {
   const Result missing = RunUbersim("bench no-such-world --duration 0.05");
   EXPECT_EQ(missing.exit_code, 3) << missing.output;
   EXPECT_NE(missing.output.find("no-such-world"), std::string::npos) << missing.output;
+}
+
+TEST(Cli, OneFlagChoosesThePhysicsProfileAndRunAndBenchSayWhichIsInForce) {
+  const Result precise = RunUbersim("run --fast --duration 0.1 --quiet --no-viewer --local-only");
+  EXPECT_EQ(precise.exit_code, 0) << precise.output;
+  EXPECT_NE(precise.output.find("physics profile precise: step 1 ms, 20 solver iterations, 4 contacts per pair\n"),
+            std::string::npos) << precise.output;
+  const Result fast = RunUbersim("run --fast --duration 0.1 --quiet --no-viewer --local-only --profile fast");
+  EXPECT_EQ(fast.exit_code, 0) << fast.output;
+  EXPECT_NE(fast.output.find("physics profile fast: step 5 ms, 10 solver iterations (2 without the ball), 1 contact per pair"),
+            std::string::npos) << fast.output;
+  // A flag beside the profile still sets its key.
+  const Result tuned = RunUbersim("run --fast --duration 0.1 --quiet --no-viewer --local-only --profile fast --solver-iterations 12");
+  EXPECT_NE(tuned.output.find("physics profile fast: step 5 ms, 12 solver iterations"), std::string::npos) << tuned.output;
+
+  const Result bench = RunUbersim("bench ssl-2003 --duration 0.05 --no-baseline --profile fast");
+  EXPECT_EQ(bench.exit_code, 0) << bench.output;
+  EXPECT_NE(bench.output.find("ssl-2003   fast         10    5.00  10/2"), std::string::npos) << bench.output;
+
+  // Every command that takes physics flags takes --profile, and refuses a name that is none.
+  for (const char* command : {"run", "bench", "batch", "soak", "validate-physics"}) {
+    const Result bad = RunUbersim(std::string(command) + " --profile quick");
+    EXPECT_EQ(bad.exit_code, 2) << command << ": " << bad.output;
+    EXPECT_NE(bad.output.find("no physics profile 'quick' (there are: precise, fast)"), std::string::npos)
+        << command << ": " << bad.output;
+  }
 }
 
 TEST(Cli, ValidatePhysicsTriesOtherSettingsOnlyIntoAnotherFolder) {

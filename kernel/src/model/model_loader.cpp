@@ -500,21 +500,30 @@ struct ModelLoader::Impl {
     }
 
     if (v.Has("physics")) {
+      // The profile first, then the keys the file sets over it (kept, so that another profile
+      // chosen on the command line still gets them).
       const ParamView p = v["physics"];
-      PhysicsModel& m = w.physics;
-      m.step = p.GetDouble("step", m.step);
-      m.solver_iterations = static_cast<int>(p.GetInt("solver_iterations", m.solver_iterations));
+      PhysicsOverrides keys;
+      if (p.Has("step")) keys.step = p["step"].AsDouble();
+      if (p.Has("solver_iterations")) keys.solver_iterations = static_cast<int>(p["solver_iterations"].AsInt());
       if (p.Has("solver_iterations_without_ball")) {
-        m.solver_iterations_without_ball = static_cast<int>(p["solver_iterations_without_ball"].AsInt());
+        keys.solver_iterations_without_ball = static_cast<int>(p["solver_iterations_without_ball"].AsInt());
       }
-      m.erp = p.GetDouble("erp", m.erp);
-      m.cfm = p.GetDouble("cfm", m.cfm);
-      if (p.Has("gravity")) m.gravity = p["gravity"].AsVec3();
-      m.broadphase = p.GetString("broadphase", m.broadphase);
-      m.max_contacts = static_cast<int>(p.GetInt("max_contacts", m.max_contacts));
-      m.contact_surface_layer = p.GetDouble("contact_surface_layer", m.contact_surface_layer);
-      m.contact_max_correcting_velocity =
-          p.GetDouble("contact_max_correcting_velocity", m.contact_max_correcting_velocity);
+      if (p.Has("erp")) keys.erp = p["erp"].AsDouble();
+      if (p.Has("cfm")) keys.cfm = p["cfm"].AsDouble();
+      if (p.Has("gravity")) keys.gravity = p["gravity"].AsVec3();
+      if (p.Has("broadphase")) keys.broadphase = p["broadphase"].AsString();
+      if (p.Has("max_contacts")) keys.max_contacts = static_cast<int>(p["max_contacts"].AsInt());
+      if (p.Has("contact_surface_layer")) keys.contact_surface_layer = p["contact_surface_layer"].AsDouble();
+      if (p.Has("contact_max_correcting_velocity")) {
+        keys.contact_max_correcting_velocity = p["contact_max_correcting_velocity"].AsDouble();
+      }
+      const std::string profile = p.GetString("profile", w.physics.profile);
+      if (!PhysicsProfile(profile, w.physics)) {  // the schema's enum lists them: kept in step by a test
+        throw ErrorAt(p["profile"], "unknown physics profile '" + profile + "'");
+      }
+      keys.ApplyTo(w.physics);
+      w.physics.world_keys = keys;
     }
     w.seed = static_cast<std::uint64_t>(v.GetInt("seed", static_cast<std::int64_t>(w.seed)));
     w.on_plugin_fault = v.GetString("on_plugin_fault", w.on_plugin_fault);

@@ -2,8 +2,11 @@
 // ModelLoader: the shipped model files, typed values, and every kind of error with its location.
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -19,6 +22,7 @@ using ubersim::kernel::ModelError;
 using ubersim::kernel::ModelLoader;
 using ubersim::kernel::PluginLoadError;
 using ubersim::kernel::PluginLookupError;
+using ubersim::kernel::PhysicsOverrides;
 using ubersim::kernel::PluginSchemaLookup;
 using ubersim::kernel::WorldModel;
 
@@ -409,6 +413,66 @@ TEST_F(Loader, IslandsWithoutTheBallMayTakeFewerSolverIterations) {
   const auto zero = WorldWith("physics:\n  solver_iterations_without_ball: 0\n");
   Expect(ErrorOf([&] { loader_.LoadWorld(zero); }), zero, 6, 3, "physics.solver_iterations_without_ball",
          "value 0 is below the minimum 1");
+}
+
+TEST_F(Loader, APhysicsProfileGivesEverySettingAndTheFilesKeysGoOverIt) {
+  // No physics block, or one naming no profile: precise, the reference.
+  const WorldModel plain = loader_.LoadWorld(WorldWith(""));
+  EXPECT_EQ(plain.physics.profile, "precise");
+  EXPECT_EQ(plain.physics.step, 0.001);
+  EXPECT_EQ(plain.physics.solver_iterations, 20);
+  EXPECT_EQ(plain.physics.max_contacts, 4);
+  EXPECT_EQ(plain.physics.contact_max_correcting_velocity, 3.0);
+  EXPECT_TRUE(plain.physics.world_keys.Keys().empty());
+
+  const WorldModel fast = loader_.LoadWorld(WorldWith("physics:\n  profile: fast\n"));
+  EXPECT_EQ(fast.physics.profile, "fast");
+  EXPECT_EQ(fast.physics.step, 0.005);
+  EXPECT_EQ(fast.physics.solver_iterations, 10);
+  EXPECT_EQ(fast.physics.IterationsWithoutBall(), 2);
+  EXPECT_EQ(fast.physics.max_contacts, 1);
+  EXPECT_EQ(fast.physics.erp, 0.2);
+
+  // A key beside the profile overrides it, and is remembered as the world's own.
+  const WorldModel tuned = loader_.LoadWorld(WorldWith("physics:\n  profile: fast\n  solver_iterations: 12\n  erp: 0.4\n"));
+  EXPECT_EQ(tuned.physics.step, 0.005);
+  EXPECT_EQ(tuned.physics.solver_iterations, 12);
+  EXPECT_EQ(tuned.physics.erp, 0.4);
+  EXPECT_EQ(tuned.physics.world_keys.Keys(), (std::vector<std::string>{"solver_iterations", "erp"}));
+
+  // Another profile chosen later (--profile) replaces the profile, not the world's own keys.
+  WorldModel chosen = tuned;
+  PhysicsOverrides flag;
+  flag.profile = "precise";
+  flag.ApplyTo(chosen.physics);
+  EXPECT_EQ(chosen.physics.profile, "precise");
+  EXPECT_EQ(chosen.physics.step, 0.001);
+  EXPECT_EQ(chosen.physics.solver_iterations, 12);
+  EXPECT_EQ(chosen.physics.erp, 0.4);
+  EXPECT_FALSE(chosen.physics.solver_iterations_without_ball);
+  EXPECT_EQ(DescribePhysics(chosen.physics),
+            "profile precise: step 1 ms, 12 solver iterations, 4 contacts per pair; the world sets solver_iterations, erp");
+  flag.profile = "quick";
+  EXPECT_THROW(flag.ApplyTo(chosen.physics), std::invalid_argument);
+
+  // A name that is no profile is reported where it stands, with the names there are.
+  const auto typo = WorldWith("physics:\n  profile: quick\n");
+  Expect(ErrorOf([&] { loader_.LoadWorld(typo); }), typo, 6, 3, "physics.profile",
+         "value \"quick\" is not allowed (allowed: precise, fast)");
+}
+
+TEST(PhysicsProfiles, TheSchemaListsExactlyTheKernelsProfiles) {
+  std::ifstream in(kSchemas / "world.schema.json");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string listed;
+  for (const std::string& name : ubersim::kernel::PhysicsProfileNames()) {
+    listed += (listed.empty() ? "" : ", ") + ("\"" + name + "\"");
+  }
+  EXPECT_NE(text.find("\"enum\": [" + listed + "]"), std::string::npos)
+      << "world.schema.json's physics.profile enum must list " << listed;
+  ubersim::kernel::PhysicsModel p;
+  for (const std::string& name : ubersim::kernel::PhysicsProfileNames()) EXPECT_TRUE(PhysicsProfile(name, p)) << name;
+  EXPECT_FALSE(PhysicsProfile("quick", p));
 }
 
 TEST_F(Loader, MissingRequiredKey) {

@@ -176,8 +176,37 @@ struct RobotPlacement {
   bool present = true;                      ///< on the field at start
 };
 
-/// Physics settings of a world.
+struct PhysicsModel;
+
+/// Physics keys set one by one over a profile: a world file's `physics:` block, or the command
+/// line's --profile, --physics-step, … (bench, batch, soak, run, validate-physics).
+struct PhysicsOverrides {
+  /// Another profile than the world's; the world file's own keys still apply over it.
+  std::optional<std::string> profile;
+  std::optional<double> step;                         ///< fixed physics step, s
+  std::optional<int> solver_iterations;               ///< QuickStep iterations
+  std::optional<int> solver_iterations_without_ball;  ///< QuickStep iterations of islands without a ball
+  std::optional<double> erp;                          ///< global ERP
+  std::optional<double> cfm;                          ///< global CFM, m/N
+  std::optional<Vec3> gravity;                        ///< m/s²
+  std::optional<std::string> broadphase;              ///< "sap", "scene_graph" or "hash"
+  std::optional<int> max_contacts;                    ///< contacts per geometry pair
+  std::optional<double> contact_surface_layer;        ///< m
+  std::optional<double> contact_max_correcting_velocity;  ///< m/s
+  /// True when any is set.
+  bool Any() const { return profile || !Keys().empty(); }
+  /// The keys set (not the profile), named as in world files, in the schema's order.
+  std::vector<std::string> Keys() const;
+  /// Sets those given in `physics`; a profile first replaces every setting with the profile's and
+  /// then puts the world's own keys (`physics.world_keys`) back over it. Throws
+  /// std::invalid_argument for a profile that does not exist.
+  void ApplyTo(PhysicsModel& physics) const;
+};
+
+/// Physics settings of a world: a named profile, and the keys its file set over it.
 struct PhysicsModel {
+  std::string profile = "precise";  ///< the profile in force (PhysicsProfileNames)
+  PhysicsOverrides world_keys;      ///< the keys the world file set over the profile
   double step = 0.001;             ///< fixed physics step, s
   int solver_iterations = 20;      ///< QuickStep iterations (every island; the ball's islands)
   /// QuickStep iterations for islands no ball belongs to; unset: solver_iterations
@@ -190,25 +219,19 @@ struct PhysicsModel {
   std::string broadphase = "sap";  ///< "sap" (measured fastest), "scene_graph" or "hash"
   int max_contacts = 4;            ///< contacts per geometry pair
   double contact_surface_layer = 0.0005;  ///< m
-  double contact_max_correcting_velocity = 10.0;  ///< m/s
+  /// m/s: penetrations are undone at most this fast (the robots' top speed; faster threw a robot
+  /// teleported onto another over the walls)
+  double contact_max_correcting_velocity = 3.0;
 };
 
-/// Physics settings tried instead of a world file's (bench, batch, validate-physics).
-struct PhysicsOverrides {
-  std::optional<double> step;           ///< fixed physics step, s
-  std::optional<int> solver_iterations;  ///< QuickStep iterations
-  std::optional<int> solver_iterations_without_ball;  ///< QuickStep iterations of islands without a ball
-  std::optional<int> max_contacts;       ///< contacts per geometry pair
-  /// True when any is set.
-  bool Any() const { return step || solver_iterations || solver_iterations_without_ball || max_contacts; }
-  /// Sets those given in `physics`.
-  void ApplyTo(PhysicsModel& physics) const {
-    if (step) physics.step = *step;
-    if (solver_iterations) physics.solver_iterations = *solver_iterations;
-    if (solver_iterations_without_ball) physics.solver_iterations_without_ball = *solver_iterations_without_ball;
-    if (max_contacts) physics.max_contacts = *max_contacts;
-  }
-};
+/// The physics profiles' names: "precise" (1 ms steps, the reference) and "fast" (5 ms steps).
+const std::vector<std::string>& PhysicsProfileNames();
+/// Sets every setting of `physics` to the named profile's (and `profile` to its name, world_keys
+/// cleared); false, changing nothing, for a name that is not a profile.
+bool PhysicsProfile(const std::string& name, PhysicsModel& physics);
+/// "profile fast: step 5 ms, 10 solver iterations (2 without the ball), 1 contact per pair", and
+/// the keys the world set over it.
+std::string DescribePhysics(const PhysicsModel& physics);
 
 /// A transport instance of a world.
 struct TransportModel {
