@@ -137,6 +137,14 @@ BareOdeMirror::BareOdeMirror(World& world, std::uint64_t seed)
   });
   ball_ids_.assign(1, ball_);
   kernel_ball_ = WorldAttorney::Ball(world).id();
+  // The robots whose model asks for more iterations, as the kernel gives them.
+  for (const RobotPlacement& p : world.model().robots) {
+    if (p.model->min_solver_iterations <= 0) continue;
+    NodeImpl* node = WorldAttorney::Scene(world).Find(std::string(ToString(p.id.team)) + "/" + std::to_string(p.id.id));
+    if (auto* chassis = node ? dynamic_cast<BodyImpl*>(node->FindBody("chassis")) : nullptr) {
+      demands_.push_back({body_of.at(chassis->id()), p.model->min_solver_iterations});
+    }
+  }
 
   // One carpet and one other static geometry to probe contact observers with.
   GeomImpl* carpet = nullptr;
@@ -362,7 +370,7 @@ void BareOdeMirror::Step() {
   last_contacts_ = 0;
   dSpaceCollide(space_.get(), this, &NearCallback);
   dRandSetSeed(ode_seed_);
-  islands_.Step(world_.get(), body_ids_, ball_ids_, step_, limbs_);
+  islands_.Step(world_.get(), body_ids_, ball_ids_, step_, limbs_, demands_);
   ode_seed_ = dRandGetSeed();
   dJointGroupEmpty(contacts_.get());
 }

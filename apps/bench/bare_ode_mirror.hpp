@@ -90,6 +90,7 @@ class BareOdeMirror {
   std::vector<char> ball_moved_log_;
   IslandStepper islands_;                 // the kernel's iterations per island, in plain ODE calls
   std::vector<dBodyID> body_ids_, ball_ids_;  // bodies newest first
+  std::vector<IterationDemand> demands_;      // robots whose model asks for more iterations
   std::vector<char> limbs_;                   // per body of body_ids_: FindLimbs
   dBodyID ball_ = nullptr;
   dBodyID kernel_ball_ = nullptr;

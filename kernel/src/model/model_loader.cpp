@@ -395,6 +395,7 @@ struct ModelLoader::Impl {
                                         root.name + "' mass " + Kilograms(root.mass.mass) + " (" + parsed.file + ")");
       }
     }
+    r->min_solver_iterations = static_cast<int>(v.GetInt("min_solver_iterations", 0));
     r->source = v;
     r->surface = ReadSurface(v, "surface", "robot");
     r->drive = Component(v, "drive", PluginKind::kDrive);

@@ -67,32 +67,90 @@ void IslandStepper::FindBallIslands(const std::vector<dBodyID>& balls) {
   }
 }
 
-bool IslandStepper::InPass(std::size_t index, bool ball_pass) const {
-  return !split_ || static_cast<bool>(in_ball_islands_[index]) == ball_pass;
+bool IslandStepper::InPass(std::size_t index, int pass) const {
+  return !split_ || group_[index] == pass;
+}
+
+void IslandStepper::GroupByDemand(const std::vector<dBodyID>& bodies, const std::vector<dBodyID>& balls,
+                                  const std::vector<IterationDemand>& demands) {
+  seeds_.clear();
+  for (dBodyID ball : balls) seeds_.push_back({ball, ball_iterations_});
+  for (const IterationDemand& d : demands) {
+    if (d.body && d.iterations > other_iterations_) seeds_.push_back(d);
+  }
+  // The highest count first, so an island reached from two seeds gets the higher; balls before
+  // demands of the same count.
+  std::stable_sort(seeds_.begin(), seeds_.end(),
+                   [](const IterationDemand& a, const IterationDemand& b) { return a.iterations > b.iterations; });
+  pass_iterations_.clear();
+  marked_.clear();
+  const auto pass_of = [this](int iterations) {
+    const auto it = std::find(pass_iterations_.begin(), pass_iterations_.end(), iterations);
+    if (it != pass_iterations_.end()) return static_cast<int>(it - pass_iterations_.begin());
+    pass_iterations_.push_back(iterations);
+    return static_cast<int>(pass_iterations_.size()) - 1;
+  };
+  const auto marked = [this](dBodyID b) {
+    return std::any_of(marked_.begin(), marked_.end(), [b](const auto& m) { return m.first == b; });
+  };
+  for (const IterationDemand& seed : seeds_) {
+    if (marked(seed.body)) continue;  // its island has a count already, as high or higher
+    const int pass = pass_of(seed.iterations);
+    // Breadth first over the island, as FindBallIslands: the links QuickStep's search follows.
+    const std::size_t first = marked_.size();
+    marked_.push_back({seed.body, pass});
+    for (std::size_t next = first; next < marked_.size(); ++next) {
+      ForEachLinkedBody(marked_[next].first, [&](dBodyID other) {
+        if (!marked(other)) marked_.push_back({other, pass});
+      });
+    }
+  }
+  group_.assign(bodies.size(), -1);
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    for (const auto& m : marked_) {
+      if (m.first == bodies[i]) {
+        group_[i] = m.second;
+        break;
+      }
+    }
+    if (group_[i] < 0) group_[i] = pass_of(other_iterations_);
+  }
 }
 
 void IslandStepper::Step(dWorldID world, const std::vector<dBodyID>& bodies, const std::vector<dBodyID>& balls,
-                         double dt, const std::vector<char>& limbs) {
+                         double dt, const std::vector<char>& limbs, const std::vector<IterationDemand>& demands) {
   limbs_ = limbs.size() == bodies.size() ? &limbs : nullptr;
   dWorldGetGravity(world, gravity_);
+  const bool demanding = std::any_of(demands.begin(), demands.end(), [this](const IterationDemand& d) {
+    return d.body && d.iterations > other_iterations_;
+  });
+  if (demanding) {
+    GroupByDemand(bodies, balls, demands);
+    split_ = pass_iterations_.size() > 1;
+    for (std::size_t pass = 0; pass < pass_iterations_.size(); ++pass) {
+      Pass(world, bodies, static_cast<int>(pass), pass_iterations_[pass], dt);
+    }
+    limbs_ = nullptr;
+    return;
+  }
   split_ = ball_iterations_ != other_iterations_ && !balls.empty();
   if (!split_) {
-    Pass(world, bodies, true, ball_iterations_, dt);
+    Pass(world, bodies, 0, ball_iterations_, dt);
   } else {
     // First the ball's islands, then the rest. Islands are disconnected, so QuickStep's search
     // from the enabled bodies never reaches a paused one. QuickStep may enable a disabled body a
     // ball's island reached, as one QuickStep would have: it stays enabled for the second pass,
     // which it sits out.
     FindBallIslands(balls);
-    in_ball_islands_.resize(bodies.size());
-    for (std::size_t i = 0; i < bodies.size(); ++i) in_ball_islands_[i] = InBallIslands(bodies[i]);
-    Pass(world, bodies, true, ball_iterations_, dt);
-    Pass(world, bodies, false, other_iterations_, dt);
+    group_.resize(bodies.size());
+    for (std::size_t i = 0; i < bodies.size(); ++i) group_[i] = InBallIslands(bodies[i]) ? 0 : 1;
+    Pass(world, bodies, 0, ball_iterations_, dt);
+    Pass(world, bodies, 1, other_iterations_, dt);
   }
   limbs_ = nullptr;  // the caller's, valid for this call only
 }
 
-void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, bool ball_pass, int iterations,
+void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int pass, int iterations,
                          double dt) {
   paused_.clear();
   lone_.clear();
@@ -101,7 +159,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, boo
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     dBodyID b = bodies[i];
     if (!dBodyIsEnabled(b)) continue;
-    if (!InPass(i, ball_pass)) {
+    if (!InPass(i, pass)) {
       paused_.push_back(b);
     } else if (IsLoneBody(b)) {
       lone_.push_back(b);
@@ -120,7 +178,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, boo
     if (lone_.size() * 10 < solved) {
       lone_.clear();
     } else {
-      TouchInQuickStepOrder(bodies, ball_pass);
+      TouchInQuickStepOrder(bodies, pass);
     }
   }
   for (dBodyID b : lone_) {
@@ -142,7 +200,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, boo
   }
 }
 
-void IslandStepper::TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, bool ball_pass) {
+void IslandStepper::TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, int pass) {
   // QuickStep's island search (ODE's util.cpp): down its body list, each enabled body not yet
   // reached starts an island; a stack walks the bodies' joint lists in order, through enabled
   // joints, and the island's bodies are stepped in the order the walk reaches them. (ODE also
@@ -158,7 +216,7 @@ void IslandStepper::TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, bo
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     dBodyID b = bodies[i];
     // A limb starts no island (Pass holds it back): its root's walk reaches it.
-    if (!dBodyIsEnabled(b) || !InPass(i, ball_pass) || IsLimb(i) || !reach(b)) continue;
+    if (!dBodyIsEnabled(b) || !InPass(i, pass) || IsLimb(i) || !reach(b)) continue;
     walk_.clear();
     while (true) {
       const dReal* p = dBodyGetPosition(b);

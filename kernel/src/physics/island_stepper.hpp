@@ -3,6 +3,7 @@
 // the bodies no joint touches stepped by the kernel.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include <ode/ode.h>
@@ -16,6 +17,13 @@ namespace ubersim::kernel {
 /// URDF link below its parent. Following such joints from any of them ends at a body not
 /// flagged, so an island search that starts only from those still reaches them all.
 std::vector<char> FindLimbs(const std::vector<dBodyID>& bodies);
+
+/// A body whose island needs at least `iterations` QuickStep iterations: a robot whose model
+/// asks for more than the world's count for islands without the ball (its chassis).
+struct IterationDemand {
+  dBodyID body = nullptr;  ///< any body of the island
+  int iterations = 1;      ///< at least this many
+};
 
 /// Steps an ODE world with QuickStep, giving the islands that hold the ball more solver iterations
 /// than the others. QuickStep already solves each island (bodies linked by joints and contacts)
@@ -46,33 +54,43 @@ class IslandStepper {
   /// wheel's carpet contact: the contacts are solved last, after the axles have carried the
   /// chassis's weight to the wheels. Started from the newest wheel, as ODE's body list has it,
   /// that wheel's contact came first; at two iterations the wheel sank 10-13 mm into the carpet.
+  ///
+  /// `demands` raise the count of their bodies' islands: an island gets the most any of its
+  /// bodies asks (a ball's island the ball's count, at least), each count one QuickStep pass,
+  /// the highest first.
   void Step(dWorldID world, const std::vector<dBodyID>& bodies, const std::vector<dBodyID>& balls, double dt,
-            const std::vector<char>& limbs = {});
+            const std::vector<char>& limbs = {}, const std::vector<IterationDemand>& demands = {});
 
  private:
   // Collects into ball_islands_ every body linked to a ball through enabled joints (contacts
   // included), as QuickStep's own island search does.
   void FindBallIslands(const std::vector<dBodyID>& balls);
   bool InBallIslands(dBodyID b) const;
-  // Steps the enabled bodies of this pass (with two passes, the ball's islands when
-  // `ball_pass`, else the others; with one, all), the lone ones here and the rest with one
-  // QuickStep of `iterations`; every other body sits the pass out.
-  void Pass(dWorldID world, const std::vector<dBodyID>& bodies, bool ball_pass, int iterations, double dt);
-  // Whether the index-th body of Step's list belongs to this pass.
-  bool InPass(std::size_t index, bool ball_pass) const;
+  // With demands: gives every body of `bodies` its pass (group_) and each pass its count
+  // (pass_iterations_), the highest count first.
+  void GroupByDemand(const std::vector<dBodyID>& bodies, const std::vector<dBodyID>& balls,
+                     const std::vector<IterationDemand>& demands);
+  // Steps the enabled bodies of pass `pass` (with one pass, all), the lone ones here and the
+  // rest with one QuickStep of `iterations`; every other body sits the pass out.
+  void Pass(dWorldID world, const std::vector<dBodyID>& bodies, int pass, int iterations, double dt);
+  // Whether the index-th body of Step's list belongs to pass `pass`.
+  bool InPass(std::size_t index, int pass) const;
   // Whether the index-th body of Step's list is a limb (see Step).
   bool IsLimb(std::size_t index) const { return limbs_ && (*limbs_)[index]; }
   // Tells the geometries of every body of the pass that it moved, in the order QuickStep would
   // step them all (its island search), without moving any.
-  void TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, bool ball_pass);
+  void TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, int pass);
 
   int ball_iterations_ = 20;
   int other_iterations_ = 20;
-  bool split_ = false;                 // this step has two passes
+  bool split_ = false;                 // this step has more than one pass
   dVector3 gravity_ = {};              // the world's, read once a step
   LoneBodyStepper lone_stepper_;
   std::vector<dBodyID> ball_islands_;  // scratch, reused each step
-  std::vector<char> in_ball_islands_;  // per body of Step's list: in ball_islands_
+  std::vector<int> group_;             // per body of Step's list: its pass
+  std::vector<int> pass_iterations_;   // per pass: its QuickStep iterations
+  std::vector<std::pair<dBodyID, int>> marked_;   // GroupByDemand's bodies reached, with their pass
+  std::vector<IterationDemand> seeds_;  // GroupByDemand's balls and demands, highest count first
   std::vector<dBodyID> paused_;        // bodies disabled for one pass, to enable again
   std::vector<dBodyID> lone_;          // this pass's lone bodies, in Step's order
   std::vector<dBodyID> walk_;          // TouchInQuickStepOrder's stack

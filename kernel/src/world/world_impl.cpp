@@ -791,7 +791,12 @@ void WorldImpl::Step() {
     body_ids_for_ = scene_->bodies_created();
   }
   ball_ids_.assign(1, ball_->id());
-  islands_.Step(world_.get(), body_ids_, ball_ids_, clock_.step_seconds(), limbs_);
+  iteration_demands_.clear();
+  for (const auto& r : robots_) {
+    const int wanted = r->model().min_solver_iterations;
+    if (wanted > 0 && r->present()) iteration_demands_.push_back({r->chassis().id(), wanted});
+  }
+  islands_.Step(world_.get(), body_ids_, ball_ids_, clock_.step_seconds(), limbs_, iteration_demands_);
   ode_random_seed_ = dRandGetSeed();
   collision_->ClearContacts();
   timings_.physics_ns += ElapsedNs(t0);

@@ -171,6 +171,7 @@ class WorldImpl {
   std::unique_ptr<CollisionManager> collision_;
   BodyImpl* ball_ = nullptr;
   IslandStepper islands_;
+  std::vector<IterationDemand> iteration_demands_;  // robots that ask for more iterations (scratch)
   std::vector<dBodyID> body_ids_, ball_ids_;  // the step's bodies for islands_, reused
   std::vector<char> limbs_;                   // per body of body_ids_: FindLimbs
   std::uint64_t body_ids_for_ = 0;             // body_ids_ lists this many bodies created

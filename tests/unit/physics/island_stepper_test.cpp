@@ -18,6 +18,7 @@
 namespace {
 
 using ubersim::kernel::IslandStepper;
+using ubersim::kernel::IterationDemand;
 using ubersim::kernel::OdeLibrary;
 using ubersim::kernel::OdeSpace;
 using ubersim::kernel::OdeWorld;
@@ -109,6 +110,56 @@ TEST(IslandStepper, EachIslandIsSteppedAsIfAloneWithItsOwnIterations) {
   ExpectSameState(without_ball.links, ref_without_ball.links);
   // The check can fail: the iterations make a difference in this scene.
   EXPECT_GT(without_ball.Stretch(1.0), 5 * with_ball.Stretch(0.0));
+}
+
+TEST(IslandStepper, AnIslandAskingForMoreIterationsGetsThemInAPassOfItsOwn) {
+  OdeLibrary ode;
+  // Three chains: one with the ball (10), one asking for 6 through its middle link, one plain (2).
+  OdeWorld all = MakeWorld();
+  Chain with_ball(all.get(), 0.0), asking(all.get(), 1.0), plain(all.get(), 2.0);
+  std::vector<dBodyID> bodies = with_ball.links;
+  for (const Chain* c : {&asking, &plain}) bodies.insert(bodies.end(), c->links.begin(), c->links.end());
+  const std::vector<dBodyID> balls{with_ball.links.back()};
+  const std::vector<IterationDemand> demands{{asking.links[2], 6}, {plain.links[0], 1}};  // 1: below 2, no effect
+  IslandStepper stepper;
+  stepper.SetIterations(10, 2);
+
+  // The references: each chain alone with the count its island should get, passes highest first.
+  OdeWorld alone_10 = MakeWorld(), alone_6 = MakeWorld(), alone_2 = MakeWorld();
+  dWorldSetQuickStepNumIterations(alone_10.get(), 10);
+  dWorldSetQuickStepNumIterations(alone_6.get(), 6);
+  dWorldSetQuickStepNumIterations(alone_2.get(), 2);
+  Chain ref_ball(alone_10.get(), 0.0), ref_asking(alone_6.get(), 1.0), ref_plain(alone_2.get(), 2.0);
+
+  unsigned long seed = 777;
+  for (int i = 0; i < 200; ++i) {
+    dRandSetSeed(seed);
+    stepper.Step(all.get(), bodies, balls, kStep, {}, demands);
+    const unsigned long after = dRandGetSeed();
+    dRandSetSeed(seed);
+    dWorldQuickStep(alone_10.get(), kStep);
+    dWorldQuickStep(alone_6.get(), kStep);
+    dWorldQuickStep(alone_2.get(), kStep);
+    seed = dRandGetSeed();
+    ASSERT_EQ(after, seed) << "the passes drew differently from the generator, step " << i;
+  }
+  ExpectSameState(with_ball.links, ref_ball.links);
+  ExpectSameState(asking.links, ref_asking.links);
+  ExpectSameState(plain.links, ref_plain.links);
+  EXPECT_GT(plain.Stretch(2.0), 2 * asking.Stretch(1.0)) << "the check can fail: 6 iterations hold better than 2";
+
+  // A demand above the ball's count wins when the two share an island.
+  OdeWorld shared = MakeWorld(), ref = MakeWorld();
+  Chain chain(shared.get(), 0.0);
+  dWorldSetQuickStepNumIterations(ref.get(), 30);
+  Chain ref_chain(ref.get(), 0.0);
+  for (int i = 0; i < 50; ++i) {
+    dRandSetSeed(1);
+    stepper.Step(shared.get(), chain.links, {chain.links.back()}, kStep, {}, {{chain.links[0], 30}});
+    dRandSetSeed(1);
+    dWorldQuickStep(ref.get(), kStep);
+  }
+  ExpectSameState(chain.links, ref_chain.links);
 }
 
 // A free body: no joint, so it is its own island, stepped by the kernel (LoneBodyStepper).

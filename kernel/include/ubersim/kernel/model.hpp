@@ -158,6 +158,9 @@ struct RobotModel {
   std::optional<ComponentModel> drive;     ///< the drive
   std::optional<ComponentModel> dribbler;  ///< optional dribbler
   std::optional<ComponentModel> kicker;    ///< optional kicker
+  /// QuickStep iterations at least for the islands this robot is in (0: the world's count); a
+  /// drive that needs more than the fast profile's 2 for islands without the ball asks here.
+  int min_solver_iterations = 0;
   ParamView source;                        ///< the file's tree as read (robot specs edit a copy)
 };
 
