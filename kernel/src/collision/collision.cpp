@@ -244,6 +244,9 @@ void CollisionManager::Refile() {
   balls_found_ = false;
   balls_.clear();
   sweep_targets_.clear();
+  hulls_found_ = false;
+  hulls_.clear();
+  hull_touching_.clear();
   surfaces_.clear();
   ball_touching_.clear();
 }
@@ -416,12 +419,63 @@ std::vector<std::pair<GeomImpl*, GeomImpl*>> CollisionManager::TouchingPairs() {
 void CollisionManager::Collide() {
   stats_ = CollisionStats{};
   ball_touching_.clear();
+  hull_touching_.clear();
+  robots_in_contact_.clear();
   if (++passes_ % kSurfaceCacheSweepPasses == 0) {
     std::erase_if(surfaces_, [this](const auto& entry) { return entry.second.last_pass + kSurfaceCacheSweepPasses < passes_; });
   }
   auto narrow = [this](GeomImpl& a, GeomImpl& b) { Narrow(a, b); };
   ForEachPair(narrow);
   if (swept_ball_step_ > 0) SweepFastBalls();
+  if (swept_robot_step_ > 0) SweepRobots();
+}
+
+void CollisionManager::SweepRobots() {
+  if (!hulls_found_) {  // the robots on the field now; Refile starts over when they change
+    graph_.Root().ForEachGeom([&](GeomImpl& g) {
+      if (g.hull() && g.prism() && g.body()) hulls_.push_back(&g);
+    });
+    hulls_found_ = true;
+  }
+  const double dt = swept_robot_step_;
+  for (std::size_t i = 0; i < hulls_.size(); ++i) {
+    GeomImpl& a = *hulls_[i];
+    if (!a.collides()) continue;
+    for (std::size_t k = i + 1; k < hulls_.size(); ++k) {
+      GeomImpl& b = *hulls_[k];
+      if (!b.collides() || a.robot() == b.robot()) continue;
+      // The most the two can close in this step: their relative speed (rotation adds little at
+      // the shells' 9 cm). Slower than a millimetre a step, the ordinary contacts suffice.
+      const double reach = (a.body()->GetTwist().linear - b.body()->GetTwist().linear).norm() * dt;
+      if (reach < 0.001) continue;
+      const Pose pa = a.GetPose(), pb = b.GetPose();
+      const double apart = std::hypot(pa.position.x() - pb.position.x(), pa.position.y() - pb.position.y());
+      if (apart > a.prism()->radius + b.prism()->radius + reach) continue;
+      const bool touching = std::any_of(hull_touching_.begin(), hull_touching_.end(), [&](const auto& pair) {
+        return (pair.first == &a && pair.second == &b) || (pair.first == &b && pair.second == &a);
+      });
+      if (touching) continue;  // its contacts are made already
+      // a's shell grown by the reach meets b's where the two would meet within the step.
+      FlatFrontPrism grown = *a.prism();
+      grown.radius += reach;
+      grown.front_distance += reach;
+      const int n = CollideUprightPrisms(grown, pa, *b.prism(), pb, kShellContacts, scratch_.data());
+      if (n <= 0) continue;  // leaning (the mesh test's), or not within reach
+      approach_.resize(static_cast<std::size_t>(n));
+      for (int c = 0; c < n; ++c) {
+        dContactGeom& cg = scratch_[static_cast<std::size_t>(c)];
+        const double gap = std::max(0.0, reach - cg.depth);
+        approach_[static_cast<std::size_t>(c)] = gap / dt;
+        cg.depth = 0.0;
+        cg.g1 = a.id();
+        cg.g2 = b.id();
+      }
+      stats_.swept_contacts += static_cast<std::size_t>(n);
+      robots_in_contact_.push_back(a.body()->id());
+      robots_in_contact_.push_back(b.body()->id());
+      AddContacts(a, b, n, approach_.data());
+    }
+  }
 }
 
 void CollisionManager::SweepFastBalls() {
@@ -488,7 +542,11 @@ void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }
 int CollisionManager::FindContacts(GeomImpl& a, GeomImpl& b) {
   if (SphereAndPlane(a, b)) return CollideSphereAndPlane(a.id(), b.id(), scratch_[0]);
   if (a.prism() && b.prism()) {
-    const int n = CollideUprightPrisms(*a.prism(), a.GetPose(), *b.prism(), b.GetPose(), max_contacts_, scratch_.data());
+    // Two shells always get every level of their contact (bottom and top of the shared height):
+    // one contact at mid-height, above the centre of mass, pitched robots that crash into each
+    // other (tipped them over at 5 ms steps); with both levels the contact holds them upright.
+    const int n = CollideUprightPrisms(*a.prism(), a.GetPose(), *b.prism(), b.GetPose(),
+                                       std::max(max_contacts_, kShellContacts), scratch_.data());
     for (int i = 0; i < n; ++i) {
       scratch_[static_cast<std::size_t>(i)].g1 = a.id();
       scratch_[static_cast<std::size_t>(i)].g2 = b.id();
@@ -500,7 +558,7 @@ int CollisionManager::FindContacts(GeomImpl& a, GeomImpl& b) {
     GeomImpl& shell = a.prism() ? a : b;
     GeomImpl& box = a.prism() ? b : a;
     const int n = CollideUprightPrismWithBox(*shell.prism(), shell.GetPose(), box.GetShape().size, box.GetPose(),
-                                             max_contacts_, scratch_.data());
+                                             std::max(max_contacts_, kShellContacts), scratch_.data());
     for (int i = 0; i < n; ++i) {
       dContactGeom& c = scratch_[static_cast<std::size_t>(i)];
       c.g1 = a.id();
@@ -523,6 +581,11 @@ void CollisionManager::Narrow(GeomImpl& a, GeomImpl& b) {
   if (n <= 0) return;
   ++stats_.touching_pairs;
   if (a.is_ball() || b.is_ball()) ball_touching_.emplace_back(&a, &b);
+  if (a.hull() && b.hull() && a.body() && b.body() && a.robot() != b.robot()) {
+    hull_touching_.emplace_back(&a, &b);
+    robots_in_contact_.push_back(a.body()->id());
+    robots_in_contact_.push_back(b.body()->id());
+  }
   AddContacts(a, b, n);
 }
 
@@ -542,7 +605,7 @@ const SurfaceMaterial& CollisionManager::PairSurface(const GeomImpl& a, const Ge
   return c.surface;
 }
 
-void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n) {
+void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double* approach) {
   const SurfaceMaterial& pair_surface = PairSurface(a, b);
   // The geometry with directional friction (an omni wheel) decides the friction direction.
   const GeomImpl* directional = a.friction_axis() ? &a : (b.friction_axis() ? &b : nullptr);
@@ -629,7 +692,12 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n) {
       mode |= dContactMu2;
       c.surface.mu2 = surface.mu2;
     }
-    if (surface.bounce > 0) {
+    if (approach) {
+      // Speculative: the bodies may close the gap within the step, no more; no bounce before
+      // they touch.
+      mode |= dContactMotionN;
+      c.surface.motionN = -approach[i];
+    } else if (surface.bounce > 0) {
       mode |= dContactBounce;
       c.surface.bounce = surface.bounce;
       c.surface.bounce_vel = surface.bounce_velocity;

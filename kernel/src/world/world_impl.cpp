@@ -203,6 +203,7 @@ void WorldImpl::Build() {
   }
   // Above 2 ms a 6.5 m/s shot moves more than half the ball's radius per step: sweep it.
   collision_->SetSweptBallStep(ph.step);
+  collision_->SetSweptRobotStep(ph.speculative_robot_contacts ? ph.step : 0.0);
 
   NodeImpl& root = scene_->Root();
   BuildField(*model_.field, static_cast<NodeImpl&>(root.AddChild("field")));
@@ -795,6 +796,11 @@ void WorldImpl::Step() {
   for (const auto& r : robots_) {
     const int wanted = r->model().min_solver_iterations;
     if (wanted > 0 && r->present()) iteration_demands_.push_back({r->chassis().id(), wanted});
+  }
+  // Robots pushing or crashing into each other are solved as the ball's islands are: with two
+  // sweeps a push converges too loosely and the robots sink into each other.
+  for (dBodyID chassis : collision_->RobotsInContact()) {
+    iteration_demands_.push_back({chassis, model_.physics.solver_iterations});
   }
   islands_.Step(world_.get(), body_ids_, ball_ids_, clock_.step_seconds(), limbs_, iteration_demands_);
   ode_random_seed_ = dRandGetSeed();
