@@ -34,6 +34,9 @@ inline constexpr int kContactCandidates = 64;
 /// Contacts two robot shells (or a shell and a wall) always get, whatever max_contacts says: two
 /// levels, two per level for flat faces pressed together (CollideUprightPrisms).
 inline constexpr int kShellContacts = 4;
+/// Deepest contact between two shells that gets the robot contact ERP (SetRobotContactErp), m:
+/// robots pushing or crashing meet within this; deeper, they were put into each other.
+inline constexpr double kStiffRobotContactDepth = 0.03;
 
 /// Thins the first `found` contacts to at most `keep`: the deepest, then each time the one
 /// farthest from those kept (ODE reports points in the order it finds them, often along one
@@ -122,6 +125,8 @@ class CollisionManager {
   /// contact motion along the normal), so a crash meets at the surface instead of a step's
   /// travel (30 mm at 6 m/s and 5 ms) inside. 0 turns it off.
   void SetSweptRobotStep(double dt) { swept_robot_step_ = dt; }
+  /// The error reduction of contacts between two robots' shells; < 0: the world's ERP.
+  void SetRobotContactErp(double erp) { robot_contact_erp_ = erp; }
   /// The chassis of every two robots whose shells touched (or were about to) in the last
   /// Collide(): their islands are solved with more iterations.
   const std::vector<dBodyID>& RobotsInContact() const { return robots_in_contact_; }
@@ -191,6 +196,7 @@ class CollisionManager {
   std::vector<GeomImpl*> sweep_targets_;  // what a swept ball may reach: every geometry but planes
   bool balls_found_ = false;
   double swept_robot_step_ = 0.0;
+  double robot_contact_erp_ = -1.0;
   std::vector<GeomImpl*> hulls_;  // the robots' shells, found at the first robot sweep
   bool hulls_found_ = false;
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> hull_touching_;  // this step's shell pairs

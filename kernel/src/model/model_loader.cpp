@@ -520,6 +520,7 @@ struct ModelLoader::Impl {
         keys.contact_max_correcting_velocity = p["contact_max_correcting_velocity"].AsDouble();
       }
       if (p.Has("speculative_robot_contacts")) keys.speculative_robot_contacts = p["speculative_robot_contacts"].AsBool();
+      if (p.Has("robot_contact_erp")) keys.robot_contact_erp = p["robot_contact_erp"].AsDouble();
       const std::string profile = p.GetString("profile", w.physics.profile);
       if (!PhysicsProfile(profile, w.physics)) {  // the schema's enum lists them: kept in step by a test
         throw ErrorAt(p["profile"], "unknown physics profile '" + profile + "'");

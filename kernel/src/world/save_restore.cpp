@@ -71,6 +71,7 @@ std::uint64_t WorldImpl::StructureDigest() const {
   // Mixed in only when set, so a snapshot saved before the setting existed still restores.
   if (p.solver_iterations_without_ball) Mix(h, static_cast<double>(*p.solver_iterations_without_ball));
   if (p.speculative_robot_contacts) Mix(h, std::string("speculative_robot_contacts"));
+  if (p.robot_contact_erp) Mix(h, *p.robot_contact_erp);
   Mix(h, p.broadphase);
   for (const auto& r : robots_) {
     Mix(h, ToString(r->id()));

@@ -204,6 +204,7 @@ void WorldImpl::Build() {
   // Above 2 ms a 6.5 m/s shot moves more than half the ball's radius per step: sweep it.
   collision_->SetSweptBallStep(ph.step);
   collision_->SetSweptRobotStep(ph.speculative_robot_contacts ? ph.step : 0.0);
+  collision_->SetRobotContactErp(ph.robot_contact_erp.value_or(-1.0));
 
   NodeImpl& root = scene_->Root();
   BuildField(*model_.field, static_cast<NodeImpl&>(root.AddChild("field")));
