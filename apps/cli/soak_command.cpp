@@ -55,11 +55,12 @@ int SoakCommand(const std::vector<std::string>& args) {
       "Runs WORLD (a file or a shipped world's name; default div-a) headless and as fast as\n"
       "possible for --duration simulated seconds under seeded random play and random teleports\n"
       "(robots and the ball onto other robots, into walls and goals, at up to 3 m/s and 6.5 m/s),\n"
-      "and checks the state every simulated second: no NaN or infinite value, nothing outside\n"
-      "the walls or under the carpet, no robot inside another, nothing impossibly fast; and the\n"
-      "resident memory stays flat after a warm-up. Prints each finding with its simulated time,\n"
-      "progress, and a summary. Exit code 6 on any finding or memory growth of 5 % or more.\n\noptions");
-  double duration = 3600.0, interval = 0.5, wall_overlap = 0.5;
+      "and checks the state every simulated second (--check-period): no NaN or infinite value,\n"
+      "nothing outside the walls or under the carpet, no robot inside another or tipped over,\n"
+      "nothing impossibly fast; and the resident memory stays flat after a warm-up. Prints each\n"
+      "finding with its simulated time, progress, and a summary. Exit code 6 on any finding or\n"
+      "memory growth of 5 % or more.\n\noptions");
+  double duration = 3600.0, interval = 0.5, wall_overlap = 0.5, check_period = 1.0;
   std::uint64_t seed = 1;
   PhysicsFlags physics_flags;
   std::string world_arg = "div-a", robot;
@@ -70,6 +71,8 @@ int SoakCommand(const std::vector<std::string>& args) {
       ("teleport-interval", po::value<double>(&interval)->default_value(interval), "mean simulated seconds between teleports")
       ("wall-overlap", po::value<double>(&wall_overlap)->default_value(wall_overlap),
        "how far into a wall a robot is teleported, as a share of the wall's thickness (0..1)")
+      ("check-period", po::value<double>(&check_period)->default_value(check_period),
+       "simulated seconds between state checks (0: every step, which finds what a check a second misses)")
       ("robot", po::value<std::string>(&robot), "put this robot model file in every robot's place")
       ("quiet,q", "no progress lines")
       ("log-teleports", "print every teleport with its simulated time (to chase a finding)")
@@ -81,8 +84,9 @@ int SoakCommand(const std::vector<std::string>& args) {
   pos.add("world", 1);
   po::variables_map vm;
   if (const auto done = ParseCommandLine(args, "soak", desc, vm, &hidden, &pos)) return *done;
-  if (!(duration > 0) || !(interval > 0) || !(wall_overlap >= 0 && wall_overlap <= 1)) {
-    std::cerr << "ubersim soak: --duration and --teleport-interval must be > 0, --wall-overlap 0..1\n";
+  if (!(duration > 0) || !(interval > 0) || !(wall_overlap >= 0 && wall_overlap <= 1) || !(check_period >= 0)) {
+    std::cerr << "ubersim soak: --duration and --teleport-interval must be > 0, --wall-overlap 0..1, "
+                 "--check-period >= 0\n";
     return kExitUsage;
   }
   kernel::PhysicsOverrides physics;
@@ -100,6 +104,7 @@ int SoakCommand(const std::vector<std::string>& args) {
   options.seed = seed;
   options.teleport_interval = interval;
   options.wall_overlap = wall_overlap;
+  options.check_period = check_period;
   if (vm.count("log-teleports")) options.on_teleport = PrintTeleport;
   std::printf("soak %s (%s): %.0f s simulated, seed %llu, %zu robots, physics %s\n", model.name.c_str(),
               file.string().c_str(), duration, static_cast<unsigned long long>(seed), model.robots.size(),

@@ -68,7 +68,7 @@ struct SoakReport {
   std::int64_t replaced = 0;           ///< objects put back after a finding
   std::vector<SoakFinding> findings;   ///< the first kKeptFindings findings
   std::int64_t finding_count = 0;      ///< all findings
-  std::array<std::int64_t, 5> by_issue{};  ///< findings by StateIssue
+  std::array<std::int64_t, kStateIssues> by_issue{};  ///< findings by StateIssue
   bool stopped_early = false;          ///< a non-finite state ended the run
   double warmup_seconds = 0;           ///< when memory judging began, s
   double rss_warm_mb = 0;              ///< resident memory at the end of the warm-up, MB

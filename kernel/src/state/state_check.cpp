@@ -166,6 +166,21 @@ void CheckBodies(CheckedObject& o, const StateCheckOptions& options, const Field
   }
 }
 
+// A robot's own bodies (its chassis, not its wheels) against upright.
+void CheckTilt(const CheckedObject& o, const StateCheckLimits& lim, Findings& out) {
+  if (o.who.kind != StateObject::Kind::kRobot) return;
+  for (const BodyRef& b : o.bodies) {
+    if (b.part.find('/') != std::string::npos) continue;  // a part's body: a wheel turns about any axis
+    const Pose pose = b.body->GetPose();
+    const Vec3 up = pose.orientation * Vec3::UnitZ();
+    const double lean = std::acos(std::clamp(up.z(), -1.0, 1.0));
+    if (lean > lim.tilt) {
+      out.Add({StateIssue::kTipped, o.who, b.part, std::nullopt, "", lean, lim.tilt, "rad",
+               "chassis up axis " + FormatVec(up) + ", position " + FormatVec(pose.position) + " m"});
+    }
+  }
+}
+
 void CheckCarpet(const CheckedObject& o, const StateCheckLimits& lim, Findings& out) {
   for (const GeomRef& g : o.geoms) {
     if (g.geom->scope() == ContactScope::kNoPlanes) continue;  // it never touches the carpet
@@ -251,6 +266,7 @@ const char* ToString(StateIssue issue) {
     case StateIssue::kUnderCarpet: return "under the carpet";
     case StateIssue::kOutsideWalls: return "outside the walls";
     case StateIssue::kInsideOther: return "inside another";
+    case StateIssue::kTipped: return "tipped";
   }
   return "?";
 }
@@ -269,6 +285,9 @@ std::string StateViolation::Describe() const {
            (other_part.empty() || (other && other_part == other->name) ? "" : " (" + other_part + ")") +
            Format(", limit %.1f mm", 1e3 * limit);
       break;
+    case StateIssue::kTipped:
+      s += Format("tipped: leaning %.1f° from upright, limit %.1f°", value * 180.0 / M_PI, limit * 180.0 / M_PI);
+      break;
   }
   return s + "; " + detail;
 }
@@ -284,6 +303,7 @@ std::vector<StateViolation> CheckState(const WorldImpl& world, const StateCheckO
   for (CheckedObject& o : objects) {
     CheckBodies(o, options, field, out);
     if (options.carpet && !o.broken && o.present) CheckCarpet(o, options.limits, out);
+    if (options.tilt && !o.broken && o.present) CheckTilt(o, options.limits, out);
   }
   if (options.overlap) CheckOverlaps(world, objects, options.limits, out);
   return out.Take();

@@ -147,6 +147,38 @@ TEST_F(DivA, TheBallUnderTheCarpetAndAWheelOnlyJustInIt) {
   EXPECT_NEAR(found[0].value, 0.0165, 1e-6);
 }
 
+TEST_F(DivA, ARobotLeaningPastTwentyDegreesHasTippedAWheelTurnedAnyWayHasNot) {
+  BodyImpl& chassis = Body("blue/3", "chassis");
+  const Pose upright = chassis.GetPose();
+  const auto lean = [&](double deg) {
+    Pose p = upright;
+    p.position.z() += 0.06;  // lifted clear of the carpet: only the lean is wrong
+    p.orientation = Quat(Eigen::AngleAxisd(deg * M_PI / 180.0, Vec3::UnitX())) * upright.orientation;
+    chassis.SetPose(p);
+  };
+  lean(15.0);  // braking hard, a crash: still on its wheels
+  StateCheckOptions no_carpet;
+  no_carpet.carpet = false;
+  no_carpet.overlap = false;
+  EXPECT_TRUE(Check(no_carpet).empty()) << All(Check(no_carpet));
+  lean(25.0);
+  const auto found = Check(no_carpet);
+  ASSERT_EQ(found.size(), 1u) << All(found);
+  EXPECT_EQ(found[0].issue, StateIssue::kTipped);
+  EXPECT_EQ(found[0].object.robot, kBlue3);
+  EXPECT_EQ(found[0].part, "chassis");
+  EXPECT_NEAR(found[0].value, 25.0 * M_PI / 180.0, 1e-6);
+  EXPECT_NE(found[0].Describe().find("leaning 25.0° from upright, limit 20.1°"), std::string::npos)
+      << found[0].Describe();
+  // Wheels turn about their axles: a wheel's own axes point anywhere.
+  chassis.SetPose(upright);
+  BodyImpl& wheel = Body("yellow/1/wheel0", "wheel");
+  Pose w = wheel.GetPose();
+  w.orientation = Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitY())) * w.orientation;
+  wheel.SetPose(w);
+  EXPECT_TRUE(Check(no_carpet).empty()) << All(Check(no_carpet));
+}
+
 TEST_F(DivA, RobotsInsideEachOtherAreNamedWithTheDepth) {
   // Side by side in y, both facing +x: their round sides meet. 20 mm deep.
   Teleport(kBlue3, 0.0, 1.0, 0.0);

@@ -21,9 +21,11 @@ enum class StateIssue {
   kUnderCarpet,   ///< reaches below the carpet deeper than a contact lets it sink
   kOutsideWalls,  ///< a body's centre is beyond the perimeter walls' outer faces
   kInsideOther,   ///< overlaps another object, a wall or a goal deeper than a contact allows
+  kTipped,        ///< a robot's chassis leans further from upright than driving or a crash tilts it
 };
+constexpr int kStateIssues = 6;  ///< number of StateIssue values
 
-/// "non-finite", "too fast", "under the carpet", "outside the walls", "inside another".
+/// "non-finite", "too fast", "under the carpet", "outside the walls", "inside another", "tipped".
 const char* ToString(StateIssue issue);
 
 /// An object of the world as the checks name it.
@@ -73,6 +75,11 @@ struct StateCheckLimits {
   /// Angular speed of any body, rad/s: a 9.5 m/s ball rolls at 440 rad/s, wheels and dribbler
   /// bars turn at most at 150 rad/s; several times that is a solver blowing up.
   double angular_speed = 3000.0;
+  /// A robot's lean from upright (its chassis' z axis against the world's), rad: 20°. Braking
+  /// hard tilts a wheeled robot by up to 8° at the fast profile, and a real SSL robot (centre of
+  /// mass 4-5 cm up, wheels 7-8 cm out) has two wheels in the air long before that; a robot
+  /// leaning further is falling over, which no crash on a field should make it do.
+  double tilt = 0.35;
 };
 
 /// Which checks run (all by default; a guard run every step may want only `finite`, the
@@ -84,6 +91,7 @@ struct StateCheckOptions {
   bool carpet = true;       ///< kUnderCarpet: every geometry that may touch the carpet
   bool walls = true;        ///< kOutsideWalls: every body
   bool overlap = true;      ///< kInsideOther: robot shells, the ball, walls and goals
+  bool tilt = true;         ///< kTipped: every robot's own bodies (its chassis)
 };
 
 /// Checks the world as it is now. Robots taken off the field are checked only for non-finite
