@@ -375,4 +375,9 @@ void BareOdeMirror::Step() {
   dJointGroupEmpty(contacts_.get());
 }
 
+KernelCollisionCounts LastCollisionCounts(World& world) {
+  const CollisionStats& s = WorldAttorney::Collision(world).stats();
+  return {s.contacts, s.touching_pairs, s.narrow_tests};
+}
+
 }  // namespace ubersim::kernel::bench

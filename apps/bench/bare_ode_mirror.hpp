@@ -100,4 +100,14 @@ class BareOdeMirror {
   unsigned long ode_seed_ = 0;
 };
 
+/// What the kernel's own collision pass made in `world`'s last step, the kernel's side of
+/// BareOdeMirror::last_contacts() (bench's contacts per step against the robots). Here, beside
+/// the mirror, because only the mirror's files may reach into the kernel's internals.
+struct KernelCollisionCounts {
+  std::size_t contacts = 0;        ///< contact joints made
+  std::size_t touching_pairs = 0;  ///< geometry pairs with at least one contact
+  std::size_t narrow_tests = 0;    ///< pairs the narrow phase tested
+};
+KernelCollisionCounts LastCollisionCounts(World& world);
+
 }  // namespace ubersim::kernel::bench

@@ -2,6 +2,7 @@
 // `ubersim bench`'s parts: the bare-ODE copy of a world, the random play, one short run. No
 // timing is asserted here (the machines are shared); the figures live in docs/performance.md.
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <sstream>
 
@@ -9,6 +10,7 @@
 
 #include "bare_ode_mirror.hpp"
 #include "bench.hpp"
+#include "instructions.hpp"
 #include "physics/scene_graph.hpp"
 #include "world/world_attorney.hpp"
 
@@ -188,6 +190,170 @@ TEST_F(BenchWorld, ARunReportsItsSplitAndTheBaseline) {
   EXPECT_NE(table.find("ssl-2003"), std::string::npos) << table;
   const std::string md = FormatMarkdown(results, "test machine", "ubersim bench");
   EXPECT_NE(md.find("| ssl-2003 | precise | 10 |"), std::string::npos) << md;
+}
+
+// Scaling with the robots: N robots on the field, half each team, none inside another.
+TEST_F(BenchWorld, PlaceRobotsPutsHalfEachTeamOnTheFieldApartAndOutOfTheCentreCircle) {
+  const WorldModel shipped = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-a.yaml");
+  const FieldGeometry& f = shipped.field->geometry;
+  for (int count : {1, 2, 6, 12, 22, 31, 32}) {
+    WorldModel model = shipped;
+    PlaceRobots(model, count);
+    ASSERT_EQ(model.robots.size(), static_cast<std::size_t>(count));
+    int blue = 0;
+    for (std::size_t i = 0; i < model.robots.size(); ++i) {
+      const RobotPlacement& a = model.robots[i];
+      ASSERT_TRUE(a.model);
+      const bool is_blue = a.id.team == Team::kBlue;
+      blue += is_blue ? 1 : 0;
+      EXPECT_EQ(is_blue, a.x < 0) << "a team in its own half";
+      EXPECT_LT(std::abs(a.x), 0.5 * f.field_length);
+      EXPECT_LT(std::abs(a.y), 0.5 * f.field_width);
+      EXPECT_GT(std::hypot(a.x, a.y), f.center_circle_radius + a.model->body.radius);
+      for (std::size_t k = i + 1; k < model.robots.size(); ++k) {
+        const RobotPlacement& b = model.robots[k];
+        EXPECT_FALSE(a.id == b.id) << count << " robots: " << ToString(a.id) << " twice";
+        EXPECT_GT(std::hypot(a.x - b.x, a.y - b.y), a.model->body.radius + b.model->body.radius + 0.05)
+            << count << " robots: " << ToString(a.id) << " and " << ToString(b.id);
+      }
+    }
+    EXPECT_EQ(blue, (count + 1) / 2) << count << " robots";
+  }
+  WorldModel model = shipped;
+  EXPECT_THROW(PlaceRobots(model, 33), std::invalid_argument);
+  EXPECT_THROW(PlaceRobots(model, 0), std::invalid_argument);
+}
+
+// The step's work against the robots: more robots, more contacts and narrow-phase tests, with
+// the robot model given (no timing asserted).
+TEST_F(BenchWorld, ARunPerRobotCountCountsTheContactsOfEachDrive) {
+  for (const char* robot : {"ssl-omni-2026.yaml", "ssl-omni-2026-force.yaml"}) {
+    BenchOptions o;
+    o.worlds = {UBERSIM_SOURCE_DIR "/models/worlds/div-a.yaml"};
+    o.sim_seconds = 1.0;
+    o.baseline = false;
+    o.physics.profile = "fast";
+    o.robot_model = std::string(UBERSIM_SOURCE_DIR "/models/robots/") + robot;
+    o.robot_counts = {2, 6};
+    const auto results = RunBench(o, registry, loader, log, nullptr);
+    ASSERT_EQ(results.size(), 2u);
+    const BenchResult& two = results[0];
+    const BenchResult& six = results[1];
+    EXPECT_EQ(two.robots, 2);
+    EXPECT_EQ(six.robots, 6);
+    EXPECT_EQ(two.profile, "fast");
+    EXPECT_EQ(two.drive, std::string(robot) == "ssl-omni-2026.yaml" ? "omni" : "omni_force");
+    EXPECT_FALSE(two.instructions.has_value());
+    if (two.drive == "omni") {
+      // Wheel bodies stand on the carpet, each through its wheels' contacts.
+      EXPECT_GE(two.contacts_per_step, 2 * 2.0) << robot;
+      EXPECT_GT(six.contacts_per_step, 2.0 * two.contacts_per_step) << robot;
+    } else {
+      // A one-body robot's drive holds it up with forces: the ball on the carpet, and robots
+      // meeting now and then, are the contacts.
+      EXPECT_GE(two.contacts_per_step, 0.5) << robot;
+      EXPECT_LT(six.contacts_per_step, 6.0) << robot;
+    }
+    EXPECT_GE(six.contacts_per_step, six.touching_pairs_per_step) << robot;
+    EXPECT_GE(six.narrow_tests_per_step, six.touching_pairs_per_step) << robot;
+    EXPECT_GT(six.narrow_tests_per_step, two.narrow_tests_per_step) << robot;
+    const TimeSplit& s = six.split;
+    EXPECT_NEAR(s.collision + s.physics + s.plugins + s.perception + s.transports + s.events + s.other, 1.0, 1e-9);
+    const std::string table = FormatWorkTable(results);
+    EXPECT_NE(table.find(two.drive), std::string::npos) << table;
+    const std::string csv = FormatCsv(results);
+    EXPECT_EQ(csv.rfind("world,profile,drive,robots,", 0), 0u) << csv;
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << csv;
+    EXPECT_NE(csv.find("div-a,fast," + two.drive + ",6,0.005,"), std::string::npos) << csv;
+    EXPECT_NE(FormatWorkMarkdown(results).find("| div-a | fast | " + two.drive + " | 6 |"), std::string::npos);
+  }
+}
+
+TEST(CallgrindOutput, TheTotalIsTheSummaryLineElseTheTotalsLine) {
+  std::istringstream both(
+      "version: 1\ncreator: callgrind-3.19.0\ncmd: ubersim bench\nevents: Ir\nsummary: 1234567\n"
+      "fn=(1) main\n0 12\ntotals: 1234567\n");
+  EXPECT_EQ(CallgrindTotal(both), std::optional<std::uint64_t>(1234567));
+  std::istringstream totals_only("events: Ir Dr\nfn=(1) main\n0 3 4\ntotals: 987 55\n");
+  EXPECT_EQ(CallgrindTotal(totals_only), std::optional<std::uint64_t>(987));
+  std::istringstream summary_first("summary: 42\ntotals: 41\n");
+  EXPECT_EQ(CallgrindTotal(summary_first), std::optional<std::uint64_t>(42));
+  std::istringstream neither("events: Ir\nfn=(1) main\n0 12\n");
+  EXPECT_EQ(CallgrindTotal(neither), std::nullopt);
+  std::istringstream garbled("summary: lots\n");
+  EXPECT_EQ(CallgrindTotal(garbled), std::nullopt);
+}
+
+TEST(CallgrindOutput, TheRunsGetTheBenchsOwnSettings) {
+  BenchOptions o;
+  o.seed = 7;
+  o.physics.profile = "fast";
+  o.physics.step = 0.004;
+  o.physics.solver_iterations_without_ball = 3;
+  o.robot_model = "models/robots/ssl-omni-2026-force.yaml";
+  const auto a = CallgrindArguments(o, "div-a.yaml", 12);
+  auto has = [&a](const std::string& key, const std::string& value) {
+    const auto at = std::find(a.begin(), a.end(), key);
+    return at != a.end() && at + 1 != a.end() && *(at + 1) == value;
+  };
+  ASSERT_GE(a.size(), 2u);
+  EXPECT_EQ(a[0], "bench");
+  EXPECT_EQ(a[1], std::filesystem::absolute("div-a.yaml").string());
+  EXPECT_NE(std::find(a.begin(), a.end(), "--no-baseline"), a.end());
+  EXPECT_TRUE(has("--seed", "7"));
+  EXPECT_TRUE(has("--robot-count", "12"));
+  EXPECT_TRUE(has("--profile", "fast"));
+  EXPECT_TRUE(has("--physics-step", "0.0040000000000000001"));
+  EXPECT_TRUE(has("--solver-iterations-without-ball", "3"));
+  EXPECT_TRUE(has("--robot", std::filesystem::absolute(*o.robot_model).string()));
+  EXPECT_EQ(std::find(a.begin(), a.end(), "--duration"), a.end()) << "MeasureInstructions adds it";
+  EXPECT_EQ(std::find(a.begin(), a.end(), "--max-contacts"), a.end()) << "not given, not passed";
+}
+
+// The real thing, on a tiny run: this test's own build of `ubersim` twice under callgrind.
+TEST_F(BenchWorld, InstructionsAreCountedUnderCallgrindWhenValgrindIsInstalled) {
+  const auto valgrind = FindValgrind();
+  if (!valgrind) GTEST_SKIP() << "valgrind is not installed";
+  BenchOptions o;
+  o.worlds = {UBERSIM_SOURCE_DIR "/models/worlds/ssl-2003.yaml"};
+  o.sim_seconds = 0.2;
+  o.baseline = false;
+  o.robot_counts = {2};
+  BenchOptions::Instructions counting;
+  counting.valgrind = *valgrind;
+  counting.program = UBERSIM_BINARY_DIR "/bin/ubersim";
+  counting.short_seconds = 0.2;
+  counting.long_seconds = 0.4;
+  o.instructions = counting;
+  const auto results = RunBench(o, registry, loader, log, nullptr);
+  ASSERT_EQ(results.size(), 1u);
+  ASSERT_TRUE(results[0].instructions.has_value());
+  const InstructionFigures& f = *results[0].instructions;
+  EXPECT_EQ(f.short_steps, 200);
+  EXPECT_EQ(f.long_steps, 400);
+  EXPECT_GT(f.short_total, 1'000'000u) << "start-up and 200 steps";
+  EXPECT_GT(f.long_total, f.short_total) << "200 more steps";
+  EXPECT_GT(f.per_sim_second, 0);
+  EXPECT_NEAR(f.per_step * 200, static_cast<double>(f.long_total - f.short_total), 1.0);
+  EXPECT_NEAR(f.per_sim_second, f.per_step / 0.001, 1e-6 * f.per_sim_second);
+  EXPECT_NE(FormatWorkTable(results).find("callgrind counted"), std::string::npos);
+
+  // A run that fails says so, with the end of its output.
+  CallgrindRun failing;
+  failing.valgrind = *valgrind;
+  failing.program = UBERSIM_BINARY_DIR "/bin/ubersim";
+  failing.arguments = {"bench", "no-such-world", "--no-baseline"};
+  failing.short_seconds = 0.1;
+  failing.long_seconds = 0.2;
+  try {
+    MeasureInstructions(failing);
+    ADD_FAILURE() << "no error";
+  } catch (const CallgrindError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("the callgrind run failed (exit code "), std::string::npos) << what;
+    EXPECT_NE(what.find("no-such-world"), std::string::npos) << what;
+    EXPECT_NE(what.find("  | "), std::string::npos) << "the tail of its output: " << what;
+  }
 }
 
 }  // namespace
