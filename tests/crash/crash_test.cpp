@@ -37,11 +37,11 @@ struct TwoRobots {
   double dt = 0.001;
 
   // Blue facing +x at (xb, 0), yellow facing -x at (xy, y), on the Div B field.
-  TwoRobots(const std::string& profile, const std::string& robot, double xb, double xy, double y = 0.0) {
+  TwoRobots(const std::string& profile, const std::string& robot, double xb, double xy, double y = 0.0,
+            PhysicsOverrides o = {}) {
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(),
                              [this](PluginKind k, const std::string& id) { return registry.Find(k, id).schema_json; });
     WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml");
-    PhysicsOverrides o;
     o.profile = profile;
     o.ApplyTo(model.physics);
     dt = model.physics.step;
@@ -127,11 +127,59 @@ TEST_P(RobotCrash, ARobotTeleportedOntoAnotherIsSeparatedNotThrown) {
   TwoRobots w(profile, robot, 0.0, 0.05, 0.03);  // 5 cm apart: deep inside each other
   const Outcome o = w.Drive(0.0, 0.0);
   EXPECT_LT(o.fastest, 3.5) << "m/s";
+  EXPECT_LT(o.most_tilt, 10 * kDeg) << "most tilt, rad";
   EXPECT_LT(o.end_tilt, kRestingTilt);
   const WorldSnapshot s = w.world->GroundTruth();
   const Vec3 a = s.robots[0].pose.position, b = s.robots[1].pose.position;
   EXPECT_GT(std::hypot(a.x() - b.x(), a.y() - b.y()), 0.135) << "pushed apart";
   EXPECT_LT(std::hypot(a.x(), a.y()), 1.0) << "not thrown";
+}
+
+// A robot put down moving (a client's teleport with a velocity) drives on from there: its wheels
+// roll with it and its speed loop starts from that velocity (Drive::Placed), so with no command
+// it brakes at its servo's 6 m/s². Before, its wheels kept their old spin and skidded the chassis
+// down at the carpet's full friction (0.8 g): a robot thrown in at 2.5 m/s tipped forward over
+// its front wheels, and the soak found it leaning 20° and more.
+TEST_P(RobotCrash, ARobotPutDownMovingDrivesOnFromThatVelocity) {
+  const auto& [profile, robot] = GetParam();
+  TwoRobots w(profile, robot, -1.0, 1.5);
+  const auto forward = [&] {
+    w.world->events().Post(CommandEvent{{Team::kBlue, 0}, LocalVelocityCommand{1.0, 0, 0}, {}, {}});
+  };
+  // Driving forward at 1 m/s, then put down elsewhere moving backward-left at 1.8 m/s.
+  const int every = std::max(1, static_cast<int>(std::lround(0.01 / w.dt)));
+  for (int i = 0; i < static_cast<int>(std::lround(1.0 / w.dt)); ++i) {
+    if (i % every == 0) forward();
+    w.world->Step();
+  }
+  PositionEvent e;
+  e.target = Target::Robot({Team::kBlue, 0});
+  e.position = Vec3(-1.0, 0.5, 0.0);
+  e.yaw = 0.5;
+  e.velocity = Vec3(-1.5, -1.0, 0.0);
+  w.world->events().Post(e);
+  w.world->ProcessEvents();
+  const RobotState put = w.world->GroundTruth().robots[0];
+  ASSERT_TRUE(put.drive);
+  // What the wheels say is the velocity it was given, in its own frame.
+  const double c = std::cos(0.5), s = std::sin(0.5);
+  EXPECT_NEAR(put.drive->local_velocity.linear.x(), c * -1.5 + s * -1.0, 0.01);
+  EXPECT_NEAR(put.drive->local_velocity.linear.y(), -s * -1.5 + c * -1.0, 0.01);
+  EXPECT_NEAR(put.drive->local_velocity.angular.z(), put.twist.angular.z(), 0.01);  // the turn it had
+  // Still told to go forward at 1 m/s: its speed loop brakes from the new velocity at 6 m/s², so
+  // the velocity changes by about 0.3 m/s in 0.05 s, and it stays on its wheels.
+  const Vec3 v0 = put.twist.linear;
+  double most_tilt = 0;
+  for (int i = 0; i < static_cast<int>(std::lround(0.05 / w.dt)); ++i) {
+    if (i % every == 0) forward();
+    w.world->Step();
+    const RobotState r = w.world->GroundTruth().robots[0];
+    most_tilt = std::max(most_tilt, std::acos(std::clamp((r.pose.orientation * Vec3::UnitZ()).z(), -1.0, 1.0)));
+  }
+  const double change = (w.world->GroundTruth().robots[0].twist.linear - v0).head<2>().norm();
+  EXPECT_LT(change, 0.4) << "m/s in 0.05 s: more than its servo brakes";
+  EXPECT_GT(change, 0.1) << "m/s in 0.05 s: it does brake";
+  EXPECT_LT(most_tilt, 10 * kDeg);
 }
 
 INSTANTIATE_TEST_SUITE_P(BothProfilesBothDrives, RobotCrash,

@@ -37,6 +37,11 @@ inline constexpr int kShellContacts = 4;
 /// Deepest contact between two shells that gets the robot contact ERP (SetRobotContactErp), m:
 /// robots pushing or crashing meet within this; deeper, they were put into each other.
 inline constexpr double kStiffRobotContactDepth = 0.03;
+/// How fast two shells inside each other are parted at most, m/s: a teleport's overlap is undone
+/// over a few steps, not in one blow at the world's correcting velocity (3 m/s), which tipped
+/// wheel robots over at the fast profile's 5 ms. Pushes and crashes sink a few millimetres at
+/// most, which ERP undoes slower than this.
+inline constexpr double kRobotPartingSpeed = 1.0;
 
 /// Thins the first `found` contacts to at most `keep`: the deepest, then each time the one
 /// farthest from those kept (ODE reports points in the order it finds them, often along one
@@ -127,6 +132,11 @@ class CollisionManager {
   void SetSweptRobotStep(double dt) { swept_robot_step_ = dt; }
   /// The error reduction of contacts between two robots' shells; < 0: the world's ERP.
   void SetRobotContactErp(double erp) { robot_contact_erp_ = erp; }
+  /// The world's step, s, and ERP: shells put into each other are parted at kRobotPartingSpeed.
+  void SetStepAndErp(double dt, double erp) {
+    step_ = dt;
+    erp_ = erp;
+  }
   /// The chassis of every two robots whose shells touched (or were about to) in the last
   /// Collide(): their islands are solved with more iterations.
   const std::vector<dBodyID>& RobotsInContact() const { return robots_in_contact_; }
@@ -197,7 +207,18 @@ class CollisionManager {
   bool balls_found_ = false;
   double swept_robot_step_ = 0.0;
   double robot_contact_erp_ = -1.0;
+  double step_ = 0.0;  // 0: shells put into each other part at the world's ERP
+  double erp_ = 0.2;
   std::vector<GeomImpl*> hulls_;  // the robots' shells, found at the first robot sweep
+  // Each shell's motion this step, read once (SweepRobots' pairs grow as the square of the robots).
+  struct SweptHull {
+    GeomImpl* geom;
+    double x, y;         // m
+    Vec3 velocity;       // m/s
+    double rim_speed;    // |ω_z|·radius, m/s
+    double radius;       // m
+  };
+  std::vector<SweptHull> swept_;
   bool hulls_found_ = false;
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> hull_touching_;  // this step's shell pairs
   std::vector<dBodyID> robots_in_contact_;  // this step's chassis touching another robot

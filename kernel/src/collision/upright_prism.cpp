@@ -32,7 +32,7 @@ struct Outline {
 };
 
 // A shell standing nearly upright: its cross-section at height z is its outline moved along
-// the leaning axis (and stretched by 1/cos(tilt), under 0.5 mm at kUprightTilt: neglected).
+// the leaning axis (and stretched by 1/cos(tilt) along it: neglected, kUprightTilt).
 struct Standing {
   Outline outline;  // at the height of the geometry's origin
   double origin_z;
@@ -299,6 +299,25 @@ int WriteLevels(const Levels& levels, int max_contacts, dContactGeom* out) {
   return 1;
 }
 
+// Two shells put nearly onto each other (a teleport) have cross-sections that almost coincide,
+// and a lean of a degree or two shifts the top one's least-overlap direction round: the bottom
+// level pushed one way, the top level the other, a couple that rolled both robots over in a
+// step. When the levels' directions disagree by more than 30°, both push along the deeper one's,
+// each with its own overlap along it.
+void SharedNormal(const Standing& a, const Standing& b, Levels& levels) {
+  auto& t = levels.touches;
+  if (t[0].spot_count == 0 || t[1].spot_count == 0 || t[0].n.dot(t[1].n) >= std::cos(M_PI / 6)) return;
+  const std::size_t deeper = t[1].depth > t[0].depth ? 1 : 0, other = 1 - deeper;
+  const V2 n = t[deeper].n;
+  const double depth = Overlap(a.At(levels.heights[other]), b.At(levels.heights[other]), n);
+  if (depth <= 0.0) {
+    t[other].spot_count = 0;
+    return;
+  }
+  t[other].n = n;
+  t[other].depth = depth;
+}
+
 }  // namespace
 
 // A closed triangle mesh, not a convex prism: ODE's convex-plane test returns the first
@@ -347,6 +366,7 @@ int CollideUprightPrisms(const FlatFrontPrism& pa_shape, const Pose& pa, const F
   for (std::size_t h = 0; h < 2; ++h) {
     if (!TouchAt(a.At(levels.heights[h]), b.At(levels.heights[h]), levels.touches[h])) levels.touches[h].spot_count = 0;
   }
+  SharedNormal(a, b, levels);
   return WriteLevels(levels, max_contacts, out);
 }
 

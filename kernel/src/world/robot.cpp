@@ -427,6 +427,12 @@ void Robot::SetVelocity(const Vec3& linear, const Vec3& angular) {
   });
 }
 
+void Robot::Placed() {
+  for (auto& p : parts_) {
+    if (p->kind == PluginKind::kDrive) Guarded(*p, "Placed", [&] { drive_->Placed(); });
+  }
+}
+
 void Robot::SetPresent(bool present) {
   if (present == present_) return;
   present_ = present;

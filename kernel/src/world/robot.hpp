@@ -66,6 +66,8 @@ class Robot {
   void Teleport(double x, double y, double yaw);
   /// Sets the velocity of every body of the robot (world frame, about the chassis origin).
   void SetVelocity(const Vec3& linear, const Vec3& angular);
+  /// Tells the drive the robot was put somewhere (after Teleport and SetVelocity): Drive::Placed.
+  void Placed();
   /// Takes the robot off the field (no collisions, frozen) or puts it back.
   void SetPresent(bool present);
   /// Ground truth.

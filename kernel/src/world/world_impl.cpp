@@ -205,6 +205,7 @@ void WorldImpl::Build() {
   collision_->SetSweptBallStep(ph.step);
   collision_->SetSweptRobotStep(ph.speculative_robot_contacts ? ph.step : 0.0);
   collision_->SetRobotContactErp(ph.robot_contact_erp.value_or(-1.0));
+  collision_->SetStepAndErp(ph.step, ph.erp);
 
   NodeImpl& root = scene_->Root();
   BuildField(*model_.field, static_cast<NodeImpl&>(root.AddChild("field")));
@@ -361,6 +362,7 @@ void WorldImpl::RebuildRobot(Robot& robot, EventAnswer& answer) {
     built = &AddRobot(p);
   }
   built->SetVelocity(twist.linear, twist.angular);
+  built->Placed();
 }
 
 void WorldImpl::Reset() {
@@ -495,6 +497,7 @@ void WorldImpl::Apply(const PositionEvent& e) {
   } else if (e.position) {
     r->SetVelocity(Vec3::Zero(), Vec3::Zero());
   }
+  if (e.position || e.yaw || e.velocity || e.angular_velocity) r->Placed();
   ++event_counters_.applied;
   reply();
 }
@@ -683,6 +686,7 @@ void WorldImpl::ChangeField(std::shared_ptr<const FieldModel> field) {
     if (x != p.position.x() || y != p.position.y()) {
       r->Teleport(x, y, p.Yaw());
       r->SetVelocity(Vec3::Zero(), Vec3::Zero());
+      r->Placed();
       ++moved;
     }
   }

@@ -118,6 +118,7 @@ class DiffDrive final : public ubersim::Drive {
       w.holding_torque = max_torque_;
       w.rotor_inertia = rotor_inertia_;
       wheels_[i] = &ubersim::AddDrivenWheel(ctx, w);
+      wheel_bodies_[i] = ctx.Node().FindChild(w.node_name)->FindBody("wheel");
     }
     AddCasters(ctx, p, caster_surface, chassis_z);
   }
@@ -153,6 +154,18 @@ class DiffDrive final : public ubersim::Drive {
   void Reset() override {
     watchdog_.Reset();
     servo_.Reset();
+  }
+
+  // Put down moving (or at rest): the wheels roll with the chassis and the speed loop starts from
+  // its velocity (forward and turning: a differential robot has no sideways).
+  void Placed() override {
+    ubersim::PlanarVelocity v = ubersim::LocalPlanarVelocity(ctx_->Chassis());
+    v.linear.y() = 0.0;
+    servo_.Set(v);
+    const double half_track_speed = 0.5 * v.angular * separation_;
+    const double rates[2] = {(v.linear.x() - half_track_speed) / wheel_radius_,
+                             (v.linear.x() + half_track_speed) / wheel_radius_};
+    for (int i = 0; i < 2; ++i) ubersim::RollWheel(*wheel_bodies_[i], ctx_->Chassis(), Vec3::UnitY(), rates[i]);
   }
 
   // The servo loop's memory, the step length the casters' contacts use, and the warning's pace.
@@ -256,6 +269,7 @@ class DiffDrive final : public ubersim::Drive {
 
   ubersim::RobotContext* ctx_ = nullptr;
   ubersim::Joint* wheels_[2] = {nullptr, nullptr};  // left (+y), right
+  ubersim::Body* wheel_bodies_[2] = {nullptr, nullptr};  // their bodies
   double wheel_radius_ = 0.03;
   double separation_ = 0.14;       // between the wheels' contact points, m
   double max_torque_ = 0.3;        // N·m

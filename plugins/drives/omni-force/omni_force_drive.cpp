@@ -162,6 +162,9 @@ class OmniForceDrive final : public ubersim::Drive {
     servo_.Reset();
   }
 
+  // Put down moving (or at rest): the speed loop starts from the chassis' velocity.
+  void Placed() override { servo_.Set(ubersim::LocalPlanarVelocity(ctx_->Chassis())); }
+
   // The servo loop's memory.
   std::string SaveState() const override {
     ubersim::StateWriter w(kStateLayout);

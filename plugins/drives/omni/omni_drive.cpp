@@ -38,6 +38,8 @@ struct Wheel {
   double grip_share = 1.0;     // cos of the roller angle: how much of a wheel turn moves along `grip`
   bool on_circle = true;       // an omni wheel with an inward axle: its lever is the wheel distance
   ubersim::Joint* hinge = nullptr;
+  ubersim::Body* body = nullptr;  // the wheel
+  Vec3 axle;                      // chassis frame
 };
 
 class OmniDrive final : public ubersim::Drive {
@@ -107,6 +109,8 @@ class OmniDrive final : public ubersim::Drive {
       spec.rotor_inertia = rotor_inertia_;
       spec.tyre_shielded = ubersim::ShellShieldsWheel(body, ctx.BallRadius(), spec);
       w.hinge = &ubersim::AddDrivenWheel(ctx, spec);
+      w.body = ctx.Node().FindChild(spec.node_name)->FindBody("wheel");
+      w.axle = axle;
       wheels_.push_back(w);
     }
     // A wheel turning at ω moves its contact by r·ω along its rolling direction; the rollers pass
@@ -149,6 +153,18 @@ class OmniDrive final : public ubersim::Drive {
   void Reset() override {
     watchdog_.Reset();
     servo_.Reset();
+  }
+
+  // Put down moving (or at rest): the wheels roll with the chassis and the speed loop starts from
+  // its velocity, as a robot's firmware would find it.
+  void Placed() override {
+    const ubersim::PlanarVelocity v = ubersim::LocalPlanarVelocity(ctx_->Chassis());
+    servo_.Set(v);
+    wheel_targets_.noalias() = geometry_ * Eigen::Vector3d(v.linear.x(), v.linear.y(), v.angular);
+    for (std::size_t i = 0; i < wheels_.size(); ++i) {
+      ubersim::RollWheel(*wheels_[i].body, ctx_->Chassis(), wheels_[i].axle,
+                         wheel_targets_(static_cast<Eigen::Index>(i)));
+    }
   }
 
   // The servo loop's memory; the wheels' motor settings and bodies are the kernel's to save.

@@ -108,6 +108,12 @@ class UBERSIM_SDK_API Drive : public Component {
   virtual void SetCommand(const MoveCommand& command) = 0;
   /// Measured wheel speeds and velocity.
   virtual DriveFeedback Feedback() const = 0;
+  /// The kernel has just put the robot somewhere (a client's teleport): the chassis and every
+  /// body of the robot have their new pose and the velocity the client gave (at rest if it gave
+  /// none), all moving as one rigid body. A drive takes that motion as its own — its wheels
+  /// rolling with it (RollWheel), its speed loop starting from it — so the robot drives on from
+  /// there instead of its wheels skidding the chassis to the old setpoint at full friction.
+  virtual void Placed() {}
 };
 
 /// Spins the ball back against the robot.

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "ubersim/params.hpp"
+#include "ubersim/scene.hpp"
 
 namespace ubersim {
 inline namespace v1 {
@@ -58,6 +59,15 @@ struct PlanarVelocity {
   Eigen::Vector2d linear = Eigen::Vector2d::Zero();  ///< forward (x), left (y), m/s
   double angular = 0.0;                              ///< counter-clockwise, rad/s
 };
+
+/// The chassis' velocity as a drive's speed loop sees it: (forward, left) in the robot's heading
+/// frame and the turn rate about the vertical, from the body's world pose and velocity.
+inline PlanarVelocity LocalPlanarVelocity(const Body& chassis) {
+  const double yaw = chassis.GetPose().Yaw();
+  const Twist t = chassis.GetTwist();
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  return {Eigen::Vector2d(c * t.linear.x() + s * t.linear.y(), -s * t.linear.x() + c * t.linear.y()), t.angular.z()};
+}
 
 /// The velocity setpoint a drive follows: targets are clamped to the speed limits, and the
 /// setpoint moves toward them within the acceleration and brake limits, step by step.

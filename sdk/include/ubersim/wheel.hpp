@@ -108,5 +108,15 @@ inline Joint& AddDrivenWheel(RobotContext& ctx, const WheelSpec& spec) {
   return joint;
 }
 
+/// Spins a wheel body at `rate` (rad/s, about its axle as the hinge measures it) relative to the
+/// chassis, keeping its centre's velocity: what a drive's Placed does to roll its wheels with the
+/// robot's new motion. `axle` is the wheel's axle in the chassis frame (WheelSpec::axle).
+inline void RollWheel(Body& wheel, const Body& chassis, const Vec3& axle, double rate) {
+  const Twist c = chassis.GetTwist();
+  Twist t = wheel.GetTwist();
+  t.angular = c.angular + chassis.GetPose().orientation * axle.normalized() * rate;
+  wheel.SetTwist(t);
+}
+
 }  // namespace v1
 }  // namespace ubersim

@@ -144,6 +144,32 @@ TEST(UprightPrism, ATiltedShellIsLeftToTheGeneralTest) {
   EXPECT_EQ(CollideUprightPrisms(kShell, tilted, kShell, pa, 4, c), -1);
 }
 
+// Put nearly onto each other (a teleport), a shell leaning 2° has its bottom cut 2.3 mm one side
+// of the other's centre and its top cut 2.3 mm the other side: each level's least overlap points
+// the other way, and the two contacts made a couple that rolled both robots over in a step (the
+// fast soak's tipped robots). Both levels push along one direction, each with its own depth.
+TEST(UprightPrism, ShellsPutOntoEachOtherPushAlongOneDirectionAtBothLevels) {
+  dContactGeom c[4];
+  const Pose pa = Upright(0, 0, 0);
+  Pose leaning = Upright(0, 0, 0);
+  leaning.orientation = Quat(Eigen::AngleAxisd(2.0 * M_PI / 180.0, Vec3::UnitY()));
+  const int n = CollideUprightPrisms(kRound, pa, kRound, leaning, 4, c);
+  ASSERT_EQ(n, 2);
+  const Vec3 first(c[0].normal[0], c[0].normal[1], c[0].normal[2]);
+  EXPECT_NEAR(first.z(), 0.0, 1e-12);
+  EXPECT_NEAR(first.norm(), 1.0, 1e-9);
+  EXPECT_NE(c[0].pos[2], c[1].pos[2]) << "one contact at each level";
+  const Vec3 second(c[1].normal[0], c[1].normal[1], c[1].normal[2]);
+  EXPECT_GT(first.dot(second), 0.999) << "the levels push the same way";
+  // Along x, where the cuts are offset: the deeper level's own depth, and the other's along it
+  // (both nearly the two radii: the shells are almost wholly inside each other).
+  EXPECT_NEAR(std::abs(first.x()), 1.0, 1e-9);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_GT(c[i].depth, 2 * 0.09 - 0.006);
+    EXPECT_LT(c[i].depth, 2 * 0.09 + 0.006);
+  }
+}
+
 TEST(UprightPrism, ALeaningShellTouchesWhereItLeans) {
   // Round shells 1 mm apart; a leans 0.05 rad toward b: its top reaches 3.3 mm further, its
   // bottom 3.3 mm less. They touch at the top only, 2.3 mm deep.
