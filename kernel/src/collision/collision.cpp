@@ -444,13 +444,19 @@ void CollisionManager::SweepRobots() {
     const dReal* p = dGeomGetPosition(g->id());
     const dReal* v = dBodyGetLinearVel(g->body()->id());
     const dReal* w = dBodyGetAngularVel(g->body()->id());
-    swept_.push_back({g, p[0], p[1], Vec3(v[0], v[1], v[2]), std::abs(w[2]) * g->prism()->radius, g->prism()->radius});
+    const Vec3 velocity(v[0], v[1], v[2]);
+    const double rim = std::abs(w[2]) * g->prism()->radius;
+    swept_.push_back({g, p[0], p[1], velocity, rim, g->prism()->radius,
+                      g->prism()->radius + (velocity.norm() + rim) * dt});
   }
   for (std::size_t i = 0; i < swept_.size(); ++i) {
     const SweptHull& sa = swept_[i];
     GeomImpl& a = *sa.geom;
     for (std::size_t k = i + 1; k < swept_.size(); ++k) {
       const SweptHull& sb = swept_[k];
+      // Farther apart than both could reach at their own speeds: no closer test can pass.
+      const double dx = sa.x - sb.x, dy = sa.y - sb.y, bound = sa.reach_bound + sb.reach_bound;
+      if (dx * dx + dy * dy > bound * bound) continue;
       GeomImpl& b = *sb.geom;
       if (a.robot() == b.robot()) continue;
       // The most the two can close in this step: their relative speed, and what turning adds at

@@ -217,6 +217,7 @@ class CollisionManager {
     Vec3 velocity;       // m/s
     double rim_speed;    // |ω_z|·radius, m/s
     double radius;       // m
+    double reach_bound;  // radius + (|v| + rim_speed)·dt: no pair reaches farther, m
   };
   std::vector<SweptHull> swept_;
   bool hulls_found_ = false;
