@@ -311,7 +311,21 @@ TEST(CallgrindOutput, TheRunsGetTheBenchsOwnSettings) {
 }
 
 // The real thing, on a tiny run: this test's own build of `ubersim` twice under callgrind.
+// Valgrind cannot run a binary built with AddressSanitizer (the suite's sanitizer pass).
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAddressSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kAddressSanitizer = true;
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+
 TEST_F(BenchWorld, InstructionsAreCountedUnderCallgrindWhenValgrindIsInstalled) {
+  if (kAddressSanitizer) GTEST_SKIP() << "valgrind cannot run an AddressSanitizer build";
   const auto valgrind = FindValgrind();
   if (!valgrind) GTEST_SKIP() << "valgrind is not installed";
   BenchOptions o;
