@@ -464,7 +464,7 @@ void CollisionManager::SweepRobots() {
       // millimetre a step, the ordinary contacts suffice.
       const double reach = ((sa.velocity - sb.velocity).norm() + sa.rim_speed + sb.rim_speed) * dt;
       if (reach < 0.001) continue;
-      const double apart = std::hypot(sa.x - sb.x, sa.y - sb.y);
+      const double apart = std::hypot(dx, dy);
       if (apart > sa.radius + sb.radius + reach) continue;
       const bool touching = std::any_of(hull_touching_.begin(), hull_touching_.end(), [&](const auto& pair) {
         return (pair.first == &a && pair.second == &b) || (pair.first == &b && pair.second == &a);

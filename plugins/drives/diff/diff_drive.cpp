@@ -10,6 +10,7 @@
 // the two wheel speeds, as the robots' firmware does. A diff robot cannot move sideways: the
 // lateral part of a command is dropped, with a rate-limited warning.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <variant>
@@ -162,9 +163,7 @@ class DiffDrive final : public ubersim::Drive {
     ubersim::PlanarVelocity v = ubersim::LocalPlanarVelocity(ctx_->Chassis());
     v.linear.y() = 0.0;
     servo_.Set(v);
-    const double half_track_speed = 0.5 * v.angular * separation_;
-    const double rates[2] = {(v.linear.x() - half_track_speed) / wheel_radius_,
-                             (v.linear.x() + half_track_speed) / wheel_radius_};
+    const std::array<double, 2> rates = WheelRates(v);
     for (int i = 0; i < 2; ++i) ubersim::RollWheel(*wheel_bodies_[i], ctx_->Chassis(), Vec3::UnitY(), rates[i]);
   }
 
@@ -202,9 +201,7 @@ class DiffDrive final : public ubersim::Drive {
       }
     }
     const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
-    const double half_track_speed = 0.5 * set.angular * separation_;
-    double left = (set.linear.x() - half_track_speed) / wheel_radius_;
-    double right = (set.linear.x() + half_track_speed) / wheel_radius_;
+    auto [left, right] = WheelRates(set);
     // Keep the curvature when a wheel would exceed its speed: scale both together.
     const double peak = std::max(std::abs(left), std::abs(right));
     if (peak > max_wheel_speed_) {
@@ -250,20 +247,20 @@ class DiffDrive final : public ubersim::Drive {
 
   // A global command's velocity in the robot frame (forward, left), m/s.
   Eigen::Vector2d ToLocal(const ubersim::GlobalVelocityCommand& g) const {
-    const double yaw = ctx_->Chassis().GetPose().Yaw();
-    const double c = std::cos(yaw), s = std::sin(yaw);
-    return {c * g.x + s * g.y, -s * g.x + c * g.y};
+    return ubersim::ToRobotFrame(ctx_->Chassis().GetPose().Yaw(), g.x, g.y);
+  }
+
+  // The wheel speeds, left then right (rad/s), that drive the robot at `v` (forward and turning).
+  std::array<double, 2> WheelRates(const ubersim::PlanarVelocity& v) const {
+    const double half_track_speed = 0.5 * v.angular * separation_;
+    return {(v.linear.x() - half_track_speed) / wheel_radius_, (v.linear.x() + half_track_speed) / wheel_radius_};
   }
 
   // The command as (forward, 0, angular) in the robot frame, within the speed limits; the
   // lateral part, which a diff robot cannot follow, is dropped.
   ubersim::PlanarVelocity TargetLocal() const {
-    ubersim::PlanarVelocity t;
-    if (const auto* l = std::get_if<ubersim::LocalVelocityCommand>(&command_)) {
-      t = {Eigen::Vector2d(l->forward, 0.0), l->angular};
-    } else if (const auto* g = std::get_if<ubersim::GlobalVelocityCommand>(&command_)) {
-      t = {Eigen::Vector2d(ToLocal(*g).x(), 0.0), g->angular};
-    }
+    ubersim::PlanarVelocity t = ubersim::CommandedVelocity(command_, ctx_->Chassis());
+    t.linear.y() = 0.0;
     return servo_.ClampToLimits(t);
   }
 

@@ -211,15 +211,7 @@ class OmniDrive final : public ubersim::Drive {
  private:
   // The command as (forward, left, angular) in the robot frame, within the speed limits.
   ubersim::PlanarVelocity TargetLocal() const {
-    ubersim::PlanarVelocity t;
-    if (const auto* l = std::get_if<ubersim::LocalVelocityCommand>(&command_)) {
-      t = {Eigen::Vector2d(l->forward, l->left), l->angular};
-    } else if (const auto* g = std::get_if<ubersim::GlobalVelocityCommand>(&command_)) {
-      const double yaw = ctx_->Chassis().GetPose().Yaw();
-      const double c = std::cos(yaw), s = std::sin(yaw);
-      t = {Eigen::Vector2d(c * g->x + s * g->y, -s * g->x + c * g->y), g->angular};
-    }
-    return servo_.ClampToLimits(t);
+    return servo_.ClampToLimits(ubersim::CommandedVelocity(command_, ctx_->Chassis()));
   }
 
   ubersim::RobotContext* ctx_ = nullptr;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include "ubersim/events.hpp"
 #include "ubersim/params.hpp"
 #include "ubersim/scene.hpp"
 
@@ -60,13 +61,29 @@ struct PlanarVelocity {
   double angular = 0.0;                              ///< counter-clockwise, rad/s
 };
 
+/// A world-frame planar vector (x, y) in the frame of a robot heading `yaw` (rad): (forward, left).
+inline Eigen::Vector2d ToRobotFrame(double yaw, double x, double y) {
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  return {c * x + s * y, -s * x + c * y};
+}
+
 /// The chassis' velocity as a drive's speed loop sees it: (forward, left) in the robot's heading
 /// frame and the turn rate about the vertical, from the body's world pose and velocity.
 inline PlanarVelocity LocalPlanarVelocity(const Body& chassis) {
-  const double yaw = chassis.GetPose().Yaw();
   const Twist t = chassis.GetTwist();
-  const double c = std::cos(yaw), s = std::sin(yaw);
-  return {Eigen::Vector2d(c * t.linear.x() + s * t.linear.y(), -s * t.linear.x() + c * t.linear.y()), t.angular.z()};
+  return {ToRobotFrame(chassis.GetPose().Yaw(), t.linear.x(), t.linear.y()), t.angular.z()};
+}
+
+/// What a velocity command asks of the robot, in its own frame: a local command as it is, a
+/// global one turned by the chassis' heading now; wheel speeds ask no velocity (zero).
+inline PlanarVelocity CommandedVelocity(const MoveCommand& command, const Body& chassis) {
+  if (const auto* l = std::get_if<LocalVelocityCommand>(&command)) {
+    return {Eigen::Vector2d(l->forward, l->left), l->angular};
+  }
+  if (const auto* g = std::get_if<GlobalVelocityCommand>(&command)) {
+    return {ToRobotFrame(chassis.GetPose().Yaw(), g->x, g->y), g->angular};
+  }
+  return {};
 }
 
 /// The velocity setpoint a drive follows: targets are clamped to the speed limits, and the

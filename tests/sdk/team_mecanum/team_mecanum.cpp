@@ -88,15 +88,7 @@ class TeamMecanum final : public ubersim::Drive {
 
   void PreStep(const ubersim::StepInfo& step) override {
     ubersim::PlanarVelocity target;
-    if (watchdog_.Fresh(ctx_->SimTime())) {
-      if (const auto* l = std::get_if<ubersim::LocalVelocityCommand>(&command_)) {
-        target = {Eigen::Vector2d(l->forward, l->left), l->angular};
-      } else if (const auto* g = std::get_if<ubersim::GlobalVelocityCommand>(&command_)) {
-        const double yaw = ctx_->Chassis().GetPose().Yaw();
-        const double c = std::cos(yaw), s = std::sin(yaw);
-        target = {Eigen::Vector2d(c * g->x + s * g->y, -s * g->x + c * g->y), g->angular};
-      }
-    }
+    if (watchdog_.Fresh(ctx_->SimTime())) target = ubersim::CommandedVelocity(command_, ctx_->Chassis());
     const ubersim::PlanarVelocity& set = servo_.Step(servo_.ClampToLimits(target), step.dt);
     const Eigen::Vector4d w = to_wheels_ * Eigen::Vector3d(set.linear.x(), set.linear.y(), set.angular);
     const double peak = w.cwiseAbs().maxCoeff();
