@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include "shared/machine.hpp"
@@ -47,14 +49,26 @@ SoakReport RunSoak(World& world, const SoakOptions& options, const std::function
     return t && now - teleports.LastMoved(*t) < grace_ns;
   };
 
+  // Robots seen leaning past the limit, and since when (ns): a rock is not a fall.
+  std::map<std::string, std::int64_t> leaning_since;
+  std::set<std::string> leaning_now;
+  const auto tipped_for_ns = static_cast<std::int64_t>(options.tipped_for * 1e9);
+
   const auto start = SteadyClock::now();
   const auto check = [&] {
     ++report.checks;
     const std::int64_t now = world.clock().time_ns();
     const double t = world.clock().seconds();
+    leaning_now.clear();
     for (StateViolation& v : CheckState(world, options.checks)) {
       // Right after a teleport the physics is still pushing the objects apart.
       if (v.issue == StateIssue::kInsideOther && (recent(v.object, now) || (v.other && recent(*v.other, now)))) continue;
+      if (v.issue == StateIssue::kTipped) {
+        leaning_now.insert(v.object.name);
+        const std::int64_t since = leaning_since.try_emplace(v.object.name, now).first->second;
+        if (now - since < tipped_for_ns) continue;
+        leaning_since.erase(v.object.name);  // reported, and put back below
+      }
       ++report.finding_count;
       ++report.by_issue[static_cast<int>(v.issue)];
       SoakFinding f{t, std::move(v)};
@@ -67,6 +81,7 @@ SoakReport RunSoak(World& world, const SoakOptions& options, const std::function
       }
       if (report.findings.size() < SoakReport::kKeptFindings) report.findings.push_back(std::move(f));
     }
+    std::erase_if(leaning_since, [&](const auto& entry) { return !leaning_now.contains(entry.first); });
     const double rss = apps::ResidentMegabytes();
     if (t >= report.warmup_seconds) {
       if (report.rss_warm_mb == 0) report.rss_warm_mb = rss;
@@ -84,6 +99,7 @@ SoakReport RunSoak(World& world, const SoakOptions& options, const std::function
     if (play.BeforeStep()) teleports.MarkMoved(Target::Ball());
     teleports.BeforeStep();
     world.Step();
+    if (options.after_step) options.after_step(world);
     if (i % check_every == 0 || i == steps) check();
   }
   report.wall_seconds = std::chrono::duration<double>(SteadyClock::now() - start).count();

@@ -32,6 +32,10 @@ struct SoakOptions {
   /// shipped worlds undo penetrations at up to 3 m/s, which parts a 0.18 m overlap within about
   /// 60 ms; 0.25 s is four times that, and a robot still inside another after it is a failure.
   double grace = 0.25;
+  /// A robot is tipped over when it leans past the limit at checks this many simulated seconds
+  /// apart or more (with the default check period: at two checks in a row). A robot knocked onto
+  /// two wheels by a crash rocks back within 0.1–0.3 s; one that stays leaning has fallen.
+  double tipped_for = 0.5;
   /// Memory is judged from this simulated time on, s (< 0: a fifth of the run, at most 300 s).
   /// Until then the process's memory climbs to its working size: ODE's step arena and the
   /// contact buffers grow to the biggest pile-up seen so far, the allocator settles.
@@ -40,6 +44,8 @@ struct SoakOptions {
   StateCheckOptions checks;        ///< which checks, which limits
   /// Optional: sees every teleport as it is posted (simulated time, s; what; the event).
   std::function<void(double, const char*, const PositionEvent&)> on_teleport;
+  /// Optional: called after every step, to trace a finding step by step.
+  std::function<void(const World&)> after_step;
 };
 
 /// A state-check finding at a simulated time.

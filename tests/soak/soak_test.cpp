@@ -2,8 +2,11 @@
 // `ubersim soak`'s parts on Div A: the random teleports put things where they say, a run is
 // deterministic for a seed, and a run reports what the state checks find (with the time, the
 // object and the values). The long run itself is `soak_div_a_short` (CMakeLists.txt).
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -266,6 +269,53 @@ TEST_F(DivA, AtTheFastSettingsNoWheelSinksIntoTheCarpetInRandomPlay) {
   });
   EXPECT_EQ(r.checks, 120);
   EXPECT_EQ(r.finding_count, 0) << "deepest " << 1e3 * deepest << " mm";
+}
+
+// A robot knocked onto two wheels rocks back: leaning past 20° for a moment is not tipped over.
+// One that lies on its side is, once it has lain there for `tipped_for`.
+TEST_F(DivA, ARobotRockingOntoTwoWheelsIsNotTippedOverOneThatFallsIs) {
+  const auto run = [&](double roll_rate, double tipped_for, double* max_lean, double* final_lean) {
+    auto world = Make();
+    PositionEvent knock;
+    knock.target = Target::Robot({Team::kBlue, 3});
+    knock.angular_velocity = Vec3(roll_rate, 0.0, 0.0);
+    world->events().Post(knock);
+    SoakOptions o;
+    o.sim_seconds = 3.0;
+    o.check_period = 0.0;      // every step: the rock is seen at its peak
+    o.teleport_interval = 1e9;  // none
+    o.tipped_for = tipped_for;
+    o.checks.finite = o.checks.speed = o.checks.walls = o.checks.overlap = o.checks.carpet = false;
+    *max_lean = 0.0;
+    o.after_step = [&](const World& w) {
+      for (const RobotState& r : w.GroundTruth().robots) {
+        if (r.id.team != Team::kBlue || r.id.id != 3) continue;
+        *final_lean = std::acos(std::clamp((r.pose.orientation * Vec3::UnitZ()).z(), -1.0, 1.0));
+        *max_lean = std::max(*max_lean, *final_lean);
+      }
+    };
+    std::vector<SoakFinding> seen;
+    RunSoak(*world, o, nullptr, [&](const SoakFinding& f) { seen.push_back(f); });
+    return seen;
+  };
+  double max_lean = 0, final_lean = 0;
+  // Knocked at 22 rad/s about its forward axis, the robot leans 33° and is back on four wheels
+  // within half a second: what the fast soak's robots put onto one another do.
+  EXPECT_TRUE(run(22.0, 0.5, &max_lean, &final_lean).empty());
+  EXPECT_GT(max_lean, 0.45);
+  EXPECT_LT(final_lean, 0.05);
+  // The same rock counted at once is a finding: the check sees it.
+  const std::vector<SoakFinding> counted = run(22.0, 0.0, &max_lean, &final_lean);
+  ASSERT_EQ(counted.size(), 1u);
+  EXPECT_EQ(counted[0].violation.issue, StateIssue::kTipped);
+  // Knocked at 30 rad/s it falls onto its side (past 90°): found once it has lain there 0.5 s.
+  const std::vector<SoakFinding> fallen = run(30.0, 0.5, &max_lean, &final_lean);
+  EXPECT_GT(max_lean, 1.4);
+  ASSERT_EQ(fallen.size(), 1u);
+  EXPECT_EQ(fallen[0].violation.issue, StateIssue::kTipped);
+  EXPECT_EQ(fallen[0].violation.object.name, "robot blue 3");
+  EXPECT_GE(fallen[0].sim_time, 0.5);
+  EXPECT_LT(fallen[0].sim_time, 1.0);
 }
 
 TEST_F(DivA, MemoryIsJudgedAfterTheWarmUp) {

@@ -21,7 +21,7 @@ enum class StateIssue {
   kUnderCarpet,   ///< reaches below the carpet deeper than a contact lets it sink
   kOutsideWalls,  ///< a body's centre is beyond the perimeter walls' outer faces
   kInsideOther,   ///< overlaps another object, a wall or a goal deeper than a contact allows
-  kTipped,        ///< a robot's chassis leans further from upright than driving or a crash tilts it
+  kTipped,        ///< a robot's chassis leans past the tilt limit now (the soak counts it when it stays)
 };
 constexpr int kStateIssues = 6;  ///< number of StateIssue values
 
