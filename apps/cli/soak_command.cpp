@@ -38,6 +38,57 @@ void PrintTeleport(double t, const char* what, const PositionEvent& e) {
               what, who.c_str(), p.x(), p.y(), p.z(), e.yaw.value_or(0.0), v.x(), v.y(), v.z());
 }
 
+// What --trace follows: the ball, or a robot ("blue 3", "robot yellow 10").
+struct TraceTarget {
+  bool ball = false;
+  RobotId robot;
+};
+
+std::optional<TraceTarget> ParseTraceTarget(std::string text) {
+  if (text == "ball") return TraceTarget{true, {}};
+  if (text.rfind("robot ", 0) == 0) text = text.substr(6);
+  const std::size_t space = text.find(' ');
+  if (space == std::string::npos) return std::nullopt;
+  const std::string team = text.substr(0, space), id = text.substr(space + 1);
+  if ((team != "blue" && team != "yellow") || id.empty() || id.size() > 2 ||
+      !std::all_of(id.begin(), id.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    return std::nullopt;
+  }
+  return TraceTarget{false, {team == "blue" ? Team::kBlue : Team::kYellow, std::stoi(id)}};
+}
+
+// --trace: one line a step for the traced object between the two times, with the nearest robot
+// and the ball, to follow a finding step by step from its seed.
+void PrintTrace(const kernel::World& world, const TraceTarget& target) {
+  const WorldSnapshot s = world.GroundTruth();
+  const double t = world.clock().seconds();
+  const BallState& ball = s.ball;
+  if (target.ball) {
+    const Vec3 p = ball.pose.position, v = ball.twist.linear;
+    std::printf("t = %.3f s: trace ball: position (%.4f, %.4f, %.4f) m, velocity (%.3f, %.3f, %.3f) m/s\n", t, p.x(),
+                p.y(), p.z(), v.x(), v.y(), v.z());
+    return;
+  }
+  const auto it = std::find_if(s.robots.begin(), s.robots.end(), [&](const RobotState& r) { return r.id == target.robot; });
+  if (it == s.robots.end() || !it->present) return;
+  const RobotState& r = *it;
+  const Vec3 p = r.pose.position, v = r.twist.linear, w = r.twist.angular;
+  const double lean = std::acos(std::clamp((r.pose.orientation * Vec3::UnitZ()).z(), -1.0, 1.0));
+  const RobotState* nearest = nullptr;
+  double apart = INFINITY;
+  for (const RobotState& q : s.robots) {
+    if (&q == &r || !q.present) continue;
+    const double d = (q.pose.position - p).head<2>().norm();
+    if (d < apart) apart = d, nearest = &q;
+  }
+  std::printf("t = %.3f s: trace robot %s %d: position (%.4f, %.4f, %.4f) m, yaw %.3f rad, lean %.1f°, velocity "
+              "(%.3f, %.3f, %.3f) m/s, angular (%.2f, %.2f, %.2f) rad/s",
+              t, ToString(r.id.team), r.id.id, p.x(), p.y(), p.z(), r.pose.Yaw(), lean * 180.0 / M_PI, v.x(), v.y(),
+              v.z(), w.x(), w.y(), w.z());
+  if (nearest) std::printf(", nearest robot %s %d %.3f m apart", ToString(nearest->id.team), nearest->id.id, apart);
+  std::printf(", ball %.3f m apart\n", (ball.pose.position - p).norm());
+}
+
 // The progress line's text: simulated and wall time, real-time factor, memory, findings so far.
 std::string SoakProgressText(const soak::SoakProgress& p) {
   char line[200];
@@ -60,7 +111,9 @@ int SoakCommand(const std::vector<std::string>& args) {
       "nothing impossibly fast; and the resident memory stays flat after a warm-up. Prints each\n"
       "finding with its simulated time, progress, and a summary. Exit code 6 on any finding or\n"
       "memory growth of 5 % or more.\n\noptions");
-  double duration = 3600.0, interval = 0.5, wall_overlap = 0.5, check_period = 1.0;
+  double duration = 3600.0, interval = 0.5, wall_overlap = 0.5, check_period = 1.0, trace_from = 0.0,
+         trace_to = INFINITY;
+  std::string trace;
   std::uint64_t seed = 1;
   PhysicsFlags physics_flags;
   std::string world_arg = "div-a", robot;
@@ -76,6 +129,11 @@ int SoakCommand(const std::vector<std::string>& args) {
       ("robot", po::value<std::string>(&robot), "put this robot model file in every robot's place")
       ("quiet,q", "no progress lines")
       ("log-teleports", "print every teleport with its simulated time (to chase a finding)")
+      ("trace", po::value<std::string>(&trace),
+       "print the state of this object every step (\"ball\", \"blue 3\", \"yellow 10\") between "
+       "--trace-from and --trace-to")
+      ("trace-from", po::value<double>(&trace_from), "simulated second the trace starts at (default 0)")
+      ("trace-to", po::value<double>(&trace_to), "simulated second the trace ends at (default: the end)")
       ("plugin-path", po::value<std::vector<std::string>>(&plugin_paths), "also search DIR for plugins (repeatable)");
   physics_flags.AddTo(desc);
   po::options_description hidden;
@@ -88,6 +146,15 @@ int SoakCommand(const std::vector<std::string>& args) {
     std::cerr << "ubersim soak: --duration and --teleport-interval must be > 0, --wall-overlap 0..1, "
                  "--check-period >= 0\n";
     return kExitUsage;
+  }
+  std::optional<TraceTarget> trace_target;
+  if (vm.count("trace")) {
+    trace_target = ParseTraceTarget(trace);
+    if (!trace_target) {
+      std::cerr << "ubersim soak: --trace takes \"ball\" or a robot as \"blue N\" or \"yellow N\", not \"" << trace
+                << "\"\n";
+      return kExitUsage;
+    }
   }
   kernel::PhysicsOverrides physics;
   if (!physics_flags.Read(vm, "soak", physics)) return kExitUsage;
@@ -106,6 +173,12 @@ int SoakCommand(const std::vector<std::string>& args) {
   options.wall_overlap = wall_overlap;
   options.check_period = check_period;
   if (vm.count("log-teleports")) options.on_teleport = PrintTeleport;
+  if (trace_target) {
+    options.after_step = [&](const kernel::World& w) {
+      const double t = w.clock().seconds();
+      if (t >= trace_from && t <= trace_to) PrintTrace(w, *trace_target);
+    };
+  }
   std::printf("soak %s (%s): %.0f s simulated, seed %llu, %zu robots, physics %s\n", model.name.c_str(),
               file.string().c_str(), duration, static_cast<unsigned long long>(seed), model.robots.size(),
               DescribePhysics(model.physics).c_str());
