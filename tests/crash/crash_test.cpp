@@ -182,6 +182,40 @@ TEST_P(RobotCrash, ARobotPutDownMovingDrivesOnFromThatVelocity) {
   EXPECT_LT(most_tilt, 10 * kDeg);
 }
 
+// A ball put against a robot (a client's or the soak's teleport), overlapping its shell, and shot
+// at 6.5 m/s straight at the robot's centre bounces off: it is not let into the hollow shell.
+TEST_P(RobotCrash, ABallPutAgainstARobotAndShotAtItBouncesOff) {
+  const auto& [profile, robot] = GetParam();
+  int inside = 0, tries = 0;
+  std::string where;
+  for (int k = 0; k < 12; ++k) {        // around the robot, every 30°
+    for (double overlap : {0.0, 0.5, 0.9, 0.98}) {  // share of the ball's radius in the shell
+      TwoRobots w(profile, robot, 0.0, 3.0);
+      const double a = k * 30.0 * kDeg;
+      const Vec3 out(std::cos(a), std::sin(a), 0.0);
+      // The shell's reach in that direction: the flat front (0.07 m) or the round 0.09 m.
+      const double reach = std::abs(a) < 1e-9 || k == 0 ? 0.07 : 0.09;
+      if (k == 0 || k == 1 || k == 11) continue;  // the mouth: the dribbler and kicker take the ball there
+      PositionEvent e;
+      e.target = Target::Ball();
+      e.position = out * (reach + 0.0215 * (1.0 - overlap));
+      e.velocity = -6.5 * out;
+      w.world->events().Post(e);
+      for (int i = 0; i < static_cast<int>(std::lround(0.3 / w.dt)); ++i) w.world->Step();
+      StateCheckOptions o;
+      o.finite = o.speed = o.carpet = o.walls = o.tilt = false;
+      ++tries;
+      for (const StateViolation& v : CheckState(*w.world, o)) {
+        if (v.object.kind == StateObject::Kind::kBall) {
+          ++inside;
+          where += " " + std::to_string(k * 30) + "°/" + std::to_string(overlap) + ":" + std::to_string(v.value);
+        }
+      }
+    }
+  }
+  EXPECT_EQ(inside, 0) << "of " << tries << ":" << where;
+}
+
 INSTANTIATE_TEST_SUITE_P(BothProfilesBothDrives, RobotCrash,
                          ::testing::Combine(::testing::Values("precise", "fast"),
                                             ::testing::Values("ssl-omni-2026.yaml", "ssl-omni-2026-force.yaml")),

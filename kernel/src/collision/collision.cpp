@@ -569,6 +569,20 @@ int CollisionManager::FindContacts(GeomImpl& a, GeomImpl& b) {
     }
     if (n >= 0) return n;  // else not both upright: the general test
   }
+  if ((a.prism() && IsSphere(b)) || (IsSphere(a) && b.prism())) {
+    // A ball meets a shell as the solid the shell stands for, not its hollow mesh.
+    const GeomImpl& shell = a.prism() ? a : b;
+    const GeomImpl& sphere = a.prism() ? b : a;
+    dContactGeom& c = scratch_[0];
+    const int n = CollideFlatFrontPrismWithSphere(*shell.prism(), shell.GetPose(), sphere.GetPose().position,
+                                                  sphere.GetShape().radius, &c);
+    c.g1 = a.id();
+    c.g2 = b.id();
+    if (n > 0 && &shell == &a) {  // the normal must point out of b into a
+      for (int k = 0; k < 3; ++k) c.normal[k] = -c.normal[k];
+    }
+    return n;
+  }
   const bool a_box = a.GetShape().kind == Shape::Kind::kBox, b_box = b.GetShape().kind == Shape::Kind::kBox;
   if ((a.prism() && b_box) || (a_box && b.prism())) {
     GeomImpl& shell = a.prism() ? a : b;

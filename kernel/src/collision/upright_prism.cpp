@@ -406,4 +406,62 @@ int CollideUprightPrismWithBox(const FlatFrontPrism& prism_shape, const Pose& pr
   return WriteLevels(levels, max_contacts, out);
 }
 
+int CollideFlatFrontPrismWithSphere(const FlatFrontPrism& prism, const Pose& prism_pose, const Vec3& centre,
+                                    double radius, dContactGeom* out) {
+  const Vec3 p = prism_pose.orientation.conjugate() * (centre - prism_pose.position);
+  const double r = prism.radius, f = std::min(prism.front_distance, prism.radius), h = prism.half_height;
+  const double half_face = std::sqrt(std::max(0.0, r * r - f * f));  // the flat face's half width
+  const double planar = std::hypot(p.x(), p.y());
+  const bool inside_outline = planar <= r && p.x() <= f;
+  Vec3 surface, normal;  // local: the nearest point of the shell, the way out toward the centre
+  double depth = 0;
+  if (inside_outline && std::abs(p.z()) <= h) {
+    // The centre inside the solid: out through the nearer of the round wall and the flat face.
+    const double to_wall = r - planar, to_face = f - p.x();
+    if (to_face < to_wall) {
+      normal = Vec3::UnitX();
+      surface = Vec3(f, p.y(), p.z());
+      depth = radius + to_face;
+    } else {
+      const Vec3 radial = planar > 1e-12 ? Vec3(p.x() / planar, p.y() / planar, 0.0) : Vec3(-1.0, 0.0, 0.0);
+      normal = radial;
+      surface = Vec3(r * radial.x(), r * radial.y(), p.z());
+      depth = radius + to_wall;
+    }
+  } else {
+    // Outside: the nearest point of the outline (at the centre's own height, clamped to the
+    // shell's), then the distance to it.
+    double qx = p.x(), qy = p.y();
+    if (!inside_outline) {
+      if (p.x() >= f && std::abs(p.y()) <= half_face) {
+        qx = f;  // in front of the flat face
+      } else {
+        qx = r * p.x() / planar;  // toward the round wall ...
+        qy = r * p.y() / planar;
+        if (qx > f) {             // ... unless that part is cut away: the face's corner
+          qx = f;
+          qy = std::copysign(half_face, p.y());
+        }
+      }
+    }
+    surface = Vec3(qx, qy, std::clamp(p.z(), -h, h));
+    const Vec3 gap = p - surface;
+    const double distance = gap.norm();
+    if (distance >= radius) return 0;
+    if (distance < 1e-12) return 0;  // on the surface exactly: the next step decides
+    normal = gap / distance;
+    depth = radius - distance;
+  }
+  const Vec3 world_normal = prism_pose.orientation * normal;
+  const Vec3 world_surface = prism_pose.position + prism_pose.orientation * surface;
+  dContactGeom& c = *out;
+  for (int k = 0; k < 3; ++k) {
+    c.pos[k] = world_surface[k];
+    c.normal[k] = world_normal[k];
+  }
+  c.depth = depth;
+  c.side1 = c.side2 = -1;
+  return 1;
+}
+
 }  // namespace ubersim::kernel

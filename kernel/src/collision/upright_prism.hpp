@@ -48,4 +48,14 @@ int CollideUprightPrisms(const FlatFrontPrism& a, const Pose& pa, const FlatFron
 int CollideUprightPrismWithBox(const FlatFrontPrism& prism, const Pose& prism_pose, const Vec3& box_size,
                                const Pose& box_pose, int max_contacts, dContactGeom* out);
 
+/// The contact between a shell, taken as the solid it stands for, and a sphere (the ball), at any
+/// tilt: normal out of the shell toward the sphere's centre, depth, position on the shell's
+/// surface; g1/g2 left for the caller. A centre inside the solid is pushed out through the side
+/// (the round wall or the flat face), never through the top or the bottom: a ball cannot be
+/// under a robot. ODE's sphere-against-mesh test sees the hollow surface only: a ball at 6.5 m/s
+/// crosses a face in one 5 ms step, or slips under a lifted edge, and is then held inside.
+/// Returns 1 with a contact, 0 when apart.
+int CollideFlatFrontPrismWithSphere(const FlatFrontPrism& prism, const Pose& prism_pose, const Vec3& centre,
+                                    double radius, dContactGeom* out);
+
 }  // namespace ubersim::kernel

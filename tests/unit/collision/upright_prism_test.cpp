@@ -282,5 +282,48 @@ TEST(UprightPrismWithBox, TiltedBoxesLeaningShellsAndWallTopsAreLeftToTheGeneral
   EXPECT_EQ(CollideUprightPrismWithBox(kShell, above, wall, Pose::FromYaw(Vec3(0, 0, 0.05), 0), 4, c), 0);
 }
 
+// The ball against a shell taken as a solid: outside it the nearest point of the outline (round
+// wall, flat face, the face's corner, top), inside it out through the side, never the bottom.
+TEST(UprightPrism, ABallMeetsTheShellAsTheSolidItStandsFor) {
+  const Pose at = Upright(0, 0, 0);  // centre 0.08 m up: the shell spans 0.0145 to 0.1455 m
+  const double r = 0.0215;
+  dContactGeom c;
+  // Behind it, 10 mm into the round wall: pushed straight back.
+  ASSERT_EQ(CollideFlatFrontPrismWithSphere(kShell, at, Vec3(-0.1015, 0, 0.0215), r, &c), 1);
+  EXPECT_NEAR(c.depth, 0.01, 1e-12);
+  EXPECT_NEAR(c.normal[0], -1.0, 1e-12);
+  EXPECT_NEAR(c.pos[0], -0.09, 1e-12);
+  // In front, 5 mm into the flat face: pushed straight forward.
+  ASSERT_EQ(CollideFlatFrontPrismWithSphere(kShell, at, Vec3(0.0865, 0.01, 0.0215), r, &c), 1);
+  EXPECT_NEAR(c.depth, 0.005, 1e-12);
+  EXPECT_NEAR(c.normal[0], 1.0, 1e-12);
+  // Off the face's corner (0.07, 0.0566): the corner is the nearest point.
+  const Vec3 corner(0.07, std::sqrt(0.09 * 0.09 - 0.07 * 0.07), 0.0215);
+  const Vec3 out(std::cos(0.35), std::sin(0.35), 0.0);  // between the face's normal and the wall's (39°)
+  ASSERT_EQ(CollideFlatFrontPrismWithSphere(kShell, at, corner + 0.02 * out, r, &c), 1);
+  EXPECT_NEAR(c.depth, 0.0015, 1e-12);
+  EXPECT_NEAR(c.normal[0], out.x(), 1e-9);
+  EXPECT_NEAR(c.normal[1], out.y(), 1e-9);
+  // Apart: no contact.
+  EXPECT_EQ(CollideFlatFrontPrismWithSphere(kShell, at, Vec3(-0.112, 0, 0.0215), r, &c), 0);
+  // Resting on the top: pushed up.
+  ASSERT_EQ(CollideFlatFrontPrismWithSphere(kShell, at, Vec3(0.0, 0.02, 0.1455 + 0.02), r, &c), 1);
+  EXPECT_NEAR(c.normal[2], 1.0, 1e-12);
+  // Inside (what a ball through the hollow mesh ended as, 49 mm from the centre): out through
+  // the round wall (41 mm away), not the bottom (7 mm away).
+  ASSERT_EQ(CollideFlatFrontPrismWithSphere(kShell, at, Vec3(-0.049, 0, 0.0215), r, &c), 1);
+  EXPECT_NEAR(c.normal[0], -1.0, 1e-12);
+  EXPECT_NEAR(c.normal[2], 0.0, 1e-12);
+  EXPECT_NEAR(c.depth, r + 0.041, 1e-12);
+  // A shell leaning 5° away from the ball, its edge lifted above the ball's centre: the edge
+  // still pushes the ball back, nearly level, where a ray from its centre passes under.
+  const Pose leaning{Vec3(0, 0, 0.08), Eigen::Quaterniond(Eigen::AngleAxisd(5.0 * M_PI / 180.0, Vec3::UnitY()))};
+  const Vec3 edge = leaning.Transform(Vec3(-0.09, 0, -0.0655));
+  ASSERT_GT(edge.z(), 0.0215);
+  ASSERT_EQ(CollideFlatFrontPrismWithSphere(kShell, leaning, Vec3(edge.x() - 0.01, 0, 0.0215), r, &c), 1);
+  EXPECT_LT(c.normal[0], -0.9);
+  EXPECT_GT(c.depth, 0.005);
+}
+
 }  // namespace
 }  // namespace ubersim::kernel
