@@ -494,6 +494,22 @@ void CollisionManager::SweepRobots() {
   }
 }
 
+namespace {
+
+// Where a ball moving `reach` along `dir` from `from` first meets a shell, in steps of a quarter
+// of its radius: the solid test's contact there (normal out of the shell toward the ball).
+bool SweepBallAgainstShell(const FlatFrontPrism& shell, const Pose& pose, const Vec3& from, const Vec3& dir,
+                           double reach, double radius, dContactGeom& hit) {
+  const int samples = static_cast<int>(std::ceil(reach / (0.25 * radius)));
+  for (int i = 1; i <= samples; ++i) {
+    const Vec3 at = from + dir * (reach * i / samples);
+    if (CollideFlatFrontPrismWithSphere(shell, pose, at, radius, &hit) > 0) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 void CollisionManager::SweepFastBalls() {
   if (!balls_found_) {  // the scene is complete by the first step; a reset builds a new manager
     graph_.Root().ForEachGeom([&](GeomImpl& g) {
@@ -519,7 +535,9 @@ void CollisionManager::SweepFastBalls() {
     dGeomRaySetClosestHit(ray_.get(), 1);
     // The ray's box: only geometries whose boxes it reaches are tested.
     const Vec3 to = from + dir * (reach + radius);
-    const Vec3 lo = from.cwiseMin(to), hi = from.cwiseMax(to);
+    // Grown by the ball's radius: a shell's solid test takes the whole ball (a ray's can only
+    // hit what the ray's own box reaches, so the growth adds no contact to those).
+    const Vec3 lo = from.cwiseMin(to) - Vec3::Constant(radius), hi = from.cwiseMax(to) + Vec3::Constant(radius);
     for (GeomImpl* target : sweep_targets_) {
       GeomImpl& other = *target;
       if (&other == ball || !MayCollide(*ball, other)) continue;
@@ -534,7 +552,13 @@ void CollisionManager::SweepFastBalls() {
       });
       if (touching) continue;  // its contacts are made already
       dContactGeom hit;
-      if (dCollide(ray_.get(), other.id(), 1, &hit, sizeof(dContactGeom)) <= 0) continue;
+      if (other.prism()) {
+        // A shell: the whole ball along its path against the solid (a ray from its centre
+        // passes by a corner the ball's side hits, and under an edge a leaning robot lifts).
+        if (!SweepBallAgainstShell(*other.prism(), other.GetPose(), from, dir, reach, radius, hit)) continue;
+      } else if (dCollide(ray_.get(), other.id(), 1, &hit, sizeof(dContactGeom)) <= 0) {
+        continue;
+      }
       // The ball's surface reaches `other` within this step: a contact at the surface point,
       // normal out of `other` toward the ball, no depth (ODE stops the approach there).
       Vec3 normal = ToVec3(hit.normal);

@@ -58,8 +58,8 @@ constexpr double kSettle = 0.0005;
 // Largest yaw gain of the wheel servos (1 reaches the target in one step, 2 oscillates forever).
 constexpr double kMaxYawGain = 1.8;
 // Layout of SaveState's bytes: bump when they change. 2: no per-wheel friction (it is the
-// world's, resolved once).
-constexpr std::uint32_t kStateLayout = 2;
+// world's, resolved once). 3: the gyro loop's heading error.
+constexpr std::uint32_t kStateLayout = 3;
 
 class OmniForceDrive final : public ubersim::Drive {
  public:
@@ -77,6 +77,7 @@ class OmniForceDrive final : public ubersim::Drive {
     }
     if (p.Has("limits")) servo_.SetLimits(ubersim::ReadServoLimits(p["limits"], servo_.Limits()));
     watchdog_.SetTimeout(p.GetDouble("command_timeout", watchdog_.Timeout()));
+    gyro_ = ubersim::GyroRateLoop(p.GetDouble("heading_hold", 10.0));
     // The same surface as the omni drive's tyres: the world's table pair <name>|carpet, or the
     // two surfaces combined, decides the wheels' grip.
     ubersim::SurfaceMaterial surface;
@@ -160,15 +161,19 @@ class OmniForceDrive final : public ubersim::Drive {
   void Reset() override {
     watchdog_.Reset();
     servo_.Reset();
+    gyro_.Reset();
   }
 
   // Put down moving (or at rest): the speed loop starts from the chassis' velocity.
-  void Placed() override { servo_.Set(ubersim::LocalPlanarVelocity(ctx_->Chassis())); }
+  void Placed() override {
+    servo_.Set(ubersim::LocalPlanarVelocity(ctx_->Chassis()));
+    gyro_.Reset();
+  }
 
   // The servo loop's memory.
   std::string SaveState() const override {
     ubersim::StateWriter w(kStateLayout);
-    w.Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_);
+    w.Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_).Double(gyro_.HeadingError());
     return w.Take();
   }
 
@@ -177,6 +182,7 @@ class OmniForceDrive final : public ubersim::Drive {
     r.Watchdog(watchdog_);
     servo_.Set(r.Setpoint());
     command_ = r.Move();
+    gyro_.SetHeadingError(r.Double());
     r.Finish();
   }
 
@@ -214,9 +220,12 @@ class OmniForceDrive final : public ubersim::Drive {
       targets = speeds.cwiseMax(-max_wheel_speed_).cwiseMin(max_wheel_speed_);
       const Eigen::Vector3d v = inverse_ * speeds;
       servo_.Set({Eigen::Vector2d(v.x(), v.y()), v.z()});
+      gyro_.Reset();
     } else {
       const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
-      targets.noalias() = geometry_ * Eigen::Vector3d(set.linear.x(), set.linear.y(), set.angular);
+      // The firmware's gyro holds the heading the setpoint integrates to.
+      const double spin = gyro_.Correct(set.angular, ctx_->Chassis().GetTwist().angular.z(), step.dt);
+      targets.noalias() = geometry_ * Eigen::Vector3d(set.linear.x(), set.linear.y(), spin);
       // Keep the direction when a wheel would exceed its speed: scale all wheels together.
       const double peak = targets.cwiseAbs().maxCoeff();
       if (peak > max_wheel_speed_) targets *= max_wheel_speed_ / peak;
@@ -317,6 +326,7 @@ class OmniForceDrive final : public ubersim::Drive {
   double mu_axle_ = 0.05;      // along the axle (the rollers)
   double rest_height_ = 0.0;   // m, the centre of mass' height standing on the carpet   // of each wheel's share of the mass in its servo force (<1: wheels far out)
   ubersim::VelocityServo servo_;       // the (forward, left, angular) setpoint the wheels follow
+  ubersim::GyroRateLoop gyro_;  // heading hold on the measured turn rate
   ubersim::CommandWatchdog watchdog_{0.1};
   ubersim::MoveCommand command_;
 };

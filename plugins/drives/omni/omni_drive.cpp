@@ -24,8 +24,8 @@ namespace {
 
 using ubersim::Vec3;
 
-// Layout of SaveState's bytes: bump when they change.
-constexpr std::uint32_t kStateLayout = 1;
+// Layout of SaveState's bytes: bump when they change. 2: the gyro loop's heading error.
+constexpr std::uint32_t kStateLayout = 2;
 
 #ifndef UBERSIM_ROLLER_DRIVE_ID
 #define UBERSIM_ROLLER_DRIVE_ID "omni"
@@ -59,6 +59,7 @@ class OmniDrive final : public ubersim::Drive {
     }
     if (p.Has("limits")) servo_.SetLimits(ubersim::ReadServoLimits(p["limits"], servo_.Limits()));
     watchdog_.SetTimeout(p.GetDouble("command_timeout", watchdog_.Timeout()));
+    gyro_ = ubersim::GyroRateLoop(p.GetDouble("heading_hold", 10.0));
     ubersim::SurfaceMaterial surface;
     surface.name = std::string(UBERSIM_ROLLER_DRIVE_ID) + "_wheel";
     surface.mu = 0.05;   // along the friction axis = the axle
@@ -153,6 +154,7 @@ class OmniDrive final : public ubersim::Drive {
   void Reset() override {
     watchdog_.Reset();
     servo_.Reset();
+    gyro_.Reset();
   }
 
   // Put down moving (or at rest): the wheels roll with the chassis and the speed loop starts from
@@ -160,6 +162,7 @@ class OmniDrive final : public ubersim::Drive {
   void Placed() override {
     const ubersim::PlanarVelocity v = ubersim::LocalPlanarVelocity(ctx_->Chassis());
     servo_.Set(v);
+    gyro_.Reset();
     wheel_targets_.noalias() = geometry_ * Eigen::Vector3d(v.linear.x(), v.linear.y(), v.angular);
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
       ubersim::RollWheel(*wheels_[i].body, ctx_->Chassis(), wheels_[i].axle,
@@ -169,7 +172,12 @@ class OmniDrive final : public ubersim::Drive {
 
   // The servo loop's memory; the wheels' motor settings and bodies are the kernel's to save.
   std::string SaveState() const override {
-    return ubersim::StateWriter(kStateLayout).Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_).Take();
+    return ubersim::StateWriter(kStateLayout)
+        .Watchdog(watchdog_)
+        .Setpoint(servo_.Setpoint())
+        .Move(command_)
+        .Double(gyro_.HeadingError())
+        .Take();
   }
 
   void RestoreState(std::string_view state) override {
@@ -177,6 +185,7 @@ class OmniDrive final : public ubersim::Drive {
     r.Watchdog(watchdog_);
     servo_.Set(r.Setpoint());
     command_ = r.Move();
+    gyro_.SetHeadingError(r.Double());
     r.Finish();
   }
 
@@ -192,12 +201,14 @@ class OmniDrive final : public ubersim::Drive {
         const Eigen::Vector3d v = inverse_ * Eigen::Map<const Eigen::VectorXd>(
                                                  w->wheel_speeds.data(), static_cast<Eigen::Index>(w->wheel_speeds.size()));
         servo_.Set({Eigen::Vector2d(v.x(), v.y()), v.z()});
+        gyro_.Reset();
         return;
       }
     }
     const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
     const Eigen::Vector2d lin = set.linear;
-    const double spin = set.angular;
+    // The firmware's gyro holds the heading the setpoint integrates to.
+    const double spin = gyro_.Correct(set.angular, ubersim::LocalPlanarVelocity(ctx_->Chassis()).angular, step.dt);
 
     wheel_targets_.noalias() = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
     // Keep the direction when a wheel would exceed its speed: scale all wheels together.
@@ -225,6 +236,7 @@ class OmniDrive final : public ubersim::Drive {
   double max_wheel_speed_ = 150;
   double rotor_inertia_ = 0;  // kg·m², reflected to the wheel
   ubersim::VelocityServo servo_;       // the (forward, left, angular) setpoint the wheels follow
+  ubersim::GyroRateLoop gyro_;         // heading hold on the measured turn rate
   ubersim::CommandWatchdog watchdog_{0.1};
   ubersim::MoveCommand command_;
 };

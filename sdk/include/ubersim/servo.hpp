@@ -130,6 +130,39 @@ class VelocityServo {
   PlanarVelocity setpoint_;
 };
 
+/// The heading hold a robot's firmware runs with its gyro: the turn rate asked of the wheels is
+/// the setpoint plus the integral of the rate error (setpoint − measured) times a gain, so a robot
+/// told to drive straight keeps its heading wherever its wheels leave it turning (slip, unequal
+/// wheels, a physics step that does not converge them), and a turn ends at the heading the
+/// setpoint integrates to. rad/s, s.
+class GyroRateLoop {
+ public:
+  /// `gain` 1/s (10: a heading error is taken out with a 0.1 s time constant; 0: no gyro, the
+  /// setpoint passes unchanged); the correction is at most ±`max_correction` rad/s.
+  explicit GyroRateLoop(double gain = 10.0, double max_correction = 2.0)
+      : gain_(gain), max_correction_(max_correction) {}
+
+  /// The turn rate to ask of the wheels this step, rad/s, given the setpoint's and the measured
+  /// rate (rad/s) and the step dt (s).
+  double Correct(double setpoint, double measured, double dt) {
+    if (gain_ <= 0.0) return setpoint;  // no gyro
+    const double limit = max_correction_ / gain_;
+    heading_error_ = std::clamp(heading_error_ + (setpoint - measured) * dt, -limit, limit);
+    return setpoint + gain_ * heading_error_;
+  }
+  /// The heading the robot lags its setpoint by, rad (what the loop corrects).
+  double HeadingError() const { return heading_error_; }
+  /// Sets the heading error (restoring a saved state), rad.
+  void SetHeadingError(double e) { heading_error_ = e; }
+  /// Forgets the error (a reset, a robot put down).
+  void Reset() { heading_error_ = 0.0; }
+
+ private:
+  double gain_;
+  double max_correction_;
+  double heading_error_ = 0.0;  // rad
+};
+
 /// Command-timeout bookkeeping: a command is fresh for `timeout` seconds after it arrived; after
 /// that the drive should brake to a stop. Times in s (simulated).
 class CommandWatchdog {
