@@ -492,8 +492,23 @@ void WorldImpl::Apply(const PositionEvent& e) {
   }
   if (e.velocity || e.angular_velocity) {
     const Twist t = r->chassis().GetTwist();
-    r->SetVelocity(e.velocity ? *e.velocity : t.linear,
-                   e.angular_velocity ? *e.angular_velocity : t.angular);
+    Vec3 v = e.velocity ? *e.velocity : t.linear;
+    if (e.position) {
+      // Put down inside another robot: the part of its velocity into that robot would strike it
+      // from inside; it is dropped (the contacts part the two).
+      const Vec3 here = r->chassis().GetPose().position;
+      for (const auto& other : robots_) {
+        if (other.get() == r || !other->present()) continue;
+        Vec3 to = other->chassis().GetPose().position - here;
+        to.z() = 0.0;
+        const double apart = to.norm();
+        if (apart < 1e-9 || apart >= r->model().body.radius + other->model().body.radius) continue;
+        const Vec3 n = to / apart;
+        const double into = v.dot(n);
+        if (into > 0.0) v -= into * n;
+      }
+    }
+    r->SetVelocity(v, e.angular_velocity ? *e.angular_velocity : t.angular);
   } else if (e.position) {
     r->SetVelocity(Vec3::Zero(), Vec3::Zero());
   }
