@@ -98,6 +98,17 @@ constexpr double kRestingTilt = 3 * kDeg;
 
 class RobotCrash : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
 
+// Both profiles times both drives, and a test name from each pair ("fast_ssl_omni_2026_yaml").
+auto ProfilesAndDrives() {
+  return ::testing::Combine(::testing::Values("precise", "fast"),
+                            ::testing::Values("ssl-omni-2026.yaml", "ssl-omni-2026-force.yaml"));
+}
+std::string ProfileAndDriveName(const ::testing::TestParamInfo<std::tuple<std::string, std::string>>& info) {
+  std::string name = std::get<0>(info.param) + "_" + std::get<1>(info.param);
+  std::replace_if(name.begin(), name.end(), [](char c) { return !std::isalnum(c); }, '_');
+  return name;
+}
+
 // 3 m/s each, 6 m/s closing: the fastest two robots meet. They stop each other and stay on their
 // wheels; at fast, before the fixes, the wheel-body robots sank 18 mm into each other and tipped
 // past the upright shells' 5.7° (then met as meshes).
@@ -244,13 +255,7 @@ TEST_P(StraightDriving, ARobotToldNotToTurnKeepsItsHeading) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BothProfilesBothDrives, StraightDriving,
-                         ::testing::Combine(::testing::Values("precise", "fast"),
-                                            ::testing::Values("ssl-omni-2026.yaml", "ssl-omni-2026-force.yaml")),
-                         [](const auto& info) {
-                           std::string name = std::get<0>(info.param) + "_" + std::get<1>(info.param);
-                           std::replace_if(name.begin(), name.end(), [](char c) { return !std::isalnum(c); }, '_');
-                           return name;
-                         });
+                         ProfilesAndDrives(), ProfileAndDriveName);
 
 // A ball hitting a robot at an angle, at up to the rules' 6.5 m/s, stays out of its shell: the
 // fast-ball sweep takes the whole ball along its path against the shell's solid. With a ray from
@@ -325,13 +330,7 @@ TEST_P(RobotCrash, ARobotPutDownInsideAnotherWhileMovingDoesNotStrikeIt) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BothProfilesBothDrives, RobotCrash,
-                         ::testing::Combine(::testing::Values("precise", "fast"),
-                                            ::testing::Values("ssl-omni-2026.yaml", "ssl-omni-2026-force.yaml")),
-                         [](const auto& info) {
-                           std::string name = std::get<0>(info.param) + "_" + std::get<1>(info.param);
-                           std::replace_if(name.begin(), name.end(), [](char c) { return !std::isalnum(c); }, '_');
-                           return name;
-                         });
+                         ProfilesAndDrives(), ProfileAndDriveName);
 
 }  // namespace
 }  // namespace ubersim::kernel
