@@ -208,7 +208,7 @@ class OmniDrive final : public ubersim::Drive {
     const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
     const Eigen::Vector2d lin = set.linear;
     // The firmware's gyro holds the heading the setpoint integrates to.
-    const double spin = gyro_.Correct(set.angular, ubersim::LocalPlanarVelocity(ctx_->Chassis()).angular, step.dt);
+    const double spin = gyro_.Correct(set.angular, ctx_->Chassis().GetTwist().angular.z(), step.dt);
 
     wheel_targets_.noalias() = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
     // Keep the direction when a wheel would exceed its speed: scale all wheels together.
