@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ubersim/kernel/logging.hpp"
+#include "ubersim/kernel/state_check.hpp"
 #include "ubersim/kernel/world.hpp"
 #include "bench.hpp"
 #include "command_line.hpp"
@@ -86,7 +87,20 @@ void PrintTrace(const kernel::World& world, const TraceTarget& target) {
               t, ToString(r.id.team), r.id.id, p.x(), p.y(), p.z(), r.pose.Yaw(), lean * 180.0 / M_PI, v.x(), v.y(),
               v.z(), w.x(), w.y(), w.z());
   if (nearest) std::printf(", nearest robot %s %d %.3f m apart", ToString(nearest->id.team), nearest->id.id, apart);
-  std::printf(", ball %.3f m apart\n", (ball.pose.position - p).norm());
+  std::printf(", ball %.3f m apart", (ball.pose.position - p).norm());
+  // What the traced robot is inside, however shallow: a push's depth building up step by step.
+  kernel::StateCheckOptions overlaps;
+  overlaps.finite = overlaps.speed = overlaps.carpet = overlaps.walls = overlaps.tilt = false;
+  overlaps.limits.robot_penetration = overlaps.limits.ball_penetration = 0.0005;
+  for (const kernel::StateViolation& v : kernel::CheckState(world, overlaps)) {
+    const auto is_traced = [&](const kernel::StateObject& o) {
+      return o.kind == kernel::StateObject::Kind::kRobot && o.robot == target.robot;
+    };
+    if (!v.other || (!is_traced(v.object) && !is_traced(*v.other))) continue;
+    const kernel::StateObject& them = is_traced(v.object) ? *v.other : v.object;
+    std::printf(", %.1f mm inside %s", 1e3 * v.value, them.name.c_str());
+  }
+  std::printf("\n");
 }
 
 // The progress line's text: simulated and wall time, real-time factor, memory, findings so far.

@@ -106,69 +106,6 @@ bool LeastOverlap(const Outline& a, const Other& b, const Directions& d, Touch& 
   return t.depth > 0.0;
 }
 
-bool TouchAt(const Outline& a, const Outline& b, Touch& t) {
-  // The overlap along a direction is, piece by piece, a constant plus a sinusoid of the angle
-  // (each outline's support is an arc point or a fixed corner). Its least value, the depth, lies
-  // where a piece is stationary (centre to centre, corner to centre, corner to corner) or where
-  // pieces meet (a face's normal, a corner's radial direction): try them all.
-  Directions d;
-  auto add = [&](const V2& v) { d.Add(v); };
-  add(b.centre - a.centre);
-  if (a.has_face()) {
-    add(a.forward);
-    for (int k = 0; k < 2; ++k) {
-      add(b.centre - a.Corner(k));
-      add(a.Corner(k) - a.centre);
-    }
-  }
-  if (b.has_face()) {
-    add(-b.forward);
-    for (int k = 0; k < 2; ++k) {
-      add(b.Corner(k) - a.centre);
-      add(b.centre - b.Corner(k));
-    }
-  }
-  if (a.has_face() && b.has_face()) {
-    for (int i = 0; i < 2; ++i) {
-      for (int j = 0; j < 2; ++j) add(b.Corner(j) - a.Corner(i));
-    }
-  }
-  if (d.count == 0) add(V2::UnitX());  // concentric discs: any direction
-  if (!LeastOverlap(a, b, d, t)) return false;
-  // Seen from above they touch midway between the two deepest points; two flat faces pressed
-  // together touch along the stretch where both faces lie, so both its ends count.
-  const V2& n = t.n;
-  const V2 deepest_a = a.Support(n), deepest_b = b.Support(-n);
-  t.spots = {0.5 * (deepest_a + deepest_b), V2::Zero()};
-  t.spot_count = 1;
-  const double kParallel = std::cos(0.01);
-  if (a.has_face() && b.has_face() && n.dot(a.forward) > kParallel && -n.dot(b.forward) > kParallel) {
-    const V2 side(-n.y(), n.x());
-    const double a0 = side.dot(a.Corner(0)), a1 = side.dot(a.Corner(1));
-    const double b0 = side.dot(b.Corner(0)), b1 = side.dot(b.Corner(1));
-    const double lo = std::max(std::min(a0, a1), std::min(b0, b1));
-    const double hi = std::min(std::max(a0, a1), std::max(b0, b1));
-    if (hi - lo > 1e-6) {
-      const double across = 0.5 * (n.dot(deepest_a) + n.dot(deepest_b));
-      t.spots = {n * across + side * lo, n * across + side * hi};
-      t.spot_count = 2;
-    }
-  }
-  return true;
-}
-
-void Write(const Touch& t, const V2& spot, double z, dContactGeom& c) {
-  c.pos[0] = spot.x();
-  c.pos[1] = spot.y();
-  c.pos[2] = z;
-  c.normal[0] = -t.n.x();  // out of b into a
-  c.normal[1] = -t.n.y();
-  c.normal[2] = 0.0;
-  c.depth = t.depth;
-  c.side1 = c.side2 = -1;
-  c.g1 = c.g2 = nullptr;
-}
-
 // A box standing upright, seen from above: a rectangle.
 struct Rect {
   V2 centre;
@@ -214,6 +151,83 @@ Reach DeepestAcross(const Rect& r, const V2& u, const V2& side, double parallel)
   return {s, s};
 }
 
+// Where A and B, overlapping t.depth along t.n, touch: midway between their deepest points along
+// n, and across n where the deepest point is. Where one side is flat there (a face square to n),
+// its deepest point is anywhere along the face: across from the other's one deepest point, so
+// the normal passes through a disc's centre (a face's corner there instead pushed a round back
+// off its centre line, the push spun it up, and the spin let the solver leave two robots sinking
+// 3.5 mm a step into each other); where both are flat, along the stretch they share (both ends).
+template <typename A, typename B>
+void PlaceSpots(const A& a, const B& b, Touch& t) {
+  const V2& n = t.n;
+  const V2 side(-n.y(), n.x());
+  const double kParallel = std::cos(0.01);
+  const double across = 0.5 * (n.dot(a.Support(n)) + n.dot(b.Support(-n)));
+  const Reach ra = DeepestAcross(a, n, side, kParallel), rb = DeepestAcross(b, -n, side, kParallel);
+  const bool a_flat = ra.hi > ra.lo, b_flat = rb.hi > rb.lo;
+  t.spot_count = 1;
+  if (a_flat && b_flat) {
+    const double lo = std::max(ra.lo, rb.lo), hi = std::min(ra.hi, rb.hi);
+    if (hi - lo > 1e-6) {
+      t.spots = {n * across + side * lo, n * across + side * hi};
+      t.spot_count = 2;
+    } else {
+      t.spots = {n * across + side * (0.5 * (lo + hi)), V2::Zero()};
+    }
+  } else if (a_flat) {
+    t.spots = {n * across + side * rb.lo, V2::Zero()};
+  } else if (b_flat) {
+    t.spots = {n * across + side * ra.lo, V2::Zero()};
+  } else {
+    t.spots = {n * across + side * (0.5 * (ra.lo + rb.lo)), V2::Zero()};
+  }
+}
+
+bool TouchAt(const Outline& a, const Outline& b, Touch& t) {
+  // The overlap along a direction is, piece by piece, a constant plus a sinusoid of the angle
+  // (each outline's support is an arc point or a fixed corner). Its least value, the depth, lies
+  // where a piece is stationary (centre to centre, corner to centre, corner to corner) or where
+  // pieces meet (a face's normal, a corner's radial direction): try them all.
+  Directions d;
+  auto add = [&](const V2& v) { d.Add(v); };
+  add(b.centre - a.centre);
+  if (a.has_face()) {
+    add(a.forward);
+    for (int k = 0; k < 2; ++k) {
+      add(b.centre - a.Corner(k));
+      add(a.Corner(k) - a.centre);
+    }
+  }
+  if (b.has_face()) {
+    add(-b.forward);
+    for (int k = 0; k < 2; ++k) {
+      add(b.Corner(k) - a.centre);
+      add(b.centre - b.Corner(k));
+    }
+  }
+  if (a.has_face() && b.has_face()) {
+    for (int i = 0; i < 2; ++i) {
+      for (int j = 0; j < 2; ++j) add(b.Corner(j) - a.Corner(i));
+    }
+  }
+  if (d.count == 0) add(V2::UnitX());  // concentric discs: any direction
+  if (!LeastOverlap(a, b, d, t)) return false;
+  PlaceSpots(a, b, t);
+  return true;
+}
+
+void Write(const Touch& t, const V2& spot, double z, dContactGeom& c) {
+  c.pos[0] = spot.x();
+  c.pos[1] = spot.y();
+  c.pos[2] = z;
+  c.normal[0] = -t.n.x();  // out of b into a
+  c.normal[1] = -t.n.y();
+  c.normal[2] = 0.0;
+  c.depth = t.depth;
+  c.side1 = c.side2 = -1;
+  c.g1 = c.g2 = nullptr;
+}
+
 // A shell's cross-section against a box's: the same separating-axis search as two shells'. The
 // overlap is piecewise the arc's or a corner's sinusoid against a box corner; its least value
 // lies where the rectangle's supporting corner changes (its edges' normals), where the outline's
@@ -236,30 +250,7 @@ bool TouchAt(const Outline& a, const Rect& b, Touch& t) {
     }
   }
   if (!LeastOverlap(a, b, d, t)) return false;
-  // They touch midway between the deepest points along n; where both are flat there, along the
-  // stretch both edges share (both its ends), else across from the one deepest point.
-  const V2& n = t.n;
-  const V2 side(-n.y(), n.x());
-  const double kParallel = std::cos(0.01);
-  const double across = 0.5 * (n.dot(a.Support(n)) + n.dot(b.Support(-n)));
-  const Reach ra = DeepestAcross(a, n, side, kParallel), rb = DeepestAcross(b, -n, side, kParallel);
-  const bool a_flat = ra.hi > ra.lo, b_flat = rb.hi > rb.lo;
-  if (a_flat && b_flat) {
-    const double lo = std::max(ra.lo, rb.lo), hi = std::min(ra.hi, rb.hi);
-    if (hi - lo > 1e-6) {
-      t.spots = {n * across + side * lo, n * across + side * hi};
-      t.spot_count = 2;
-      return true;
-    }
-    t.spots = {n * across + side * (0.5 * (lo + hi)), V2::Zero()};
-  } else if (a_flat) {
-    t.spots = {n * across + side * rb.lo, V2::Zero()};
-  } else if (b_flat) {
-    t.spots = {n * across + side * ra.lo, V2::Zero()};
-  } else {
-    t.spots = {n * across + side * (0.5 * (ra.lo + rb.lo)), V2::Zero()};
-  }
-  t.spot_count = 1;
+  PlaceSpots(a, b, t);
   return true;
 }
 

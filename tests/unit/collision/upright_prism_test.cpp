@@ -106,6 +106,30 @@ TEST(UprightPrism, FacesPressedTogetherTouchAlongTheirSharedStretch) {
   EXPECT_NEAR(c[0].pos[2], 0.08, 1e-9);
 }
 
+// A flat face pressed against a round back touches it where the disc is deepest: on the line
+// through the disc's centre along the face's normal, whichever the face or the disc is (a or b).
+// The contact sat midway between the face's corner and the disc instead, up to 28 mm off that
+// line: the push spun the round robot up and two robots sank 17 mm into each other (the fast
+// soak's seed 3).
+TEST(UprightPrism, AFaceAgainstADiscTouchesOnTheDiscsCentreLine) {
+  for (const double sideways : {0.0, 0.02, -0.035, 0.05}) {
+    const Pose face = Upright(0, 0, 0);                       // face at x = 0.07, facing +x
+    const Pose disc = Upright(0.159, sideways, M_PI / 2);      // round back 1 mm into it
+    dContactGeom c[4];
+    for (const bool face_first : {true, false}) {
+      const int n = face_first ? CollideUprightPrisms(kShell, face, kRound, disc, 4, c)
+                               : CollideUprightPrisms(kRound, disc, kShell, face, 4, c);
+      ASSERT_EQ(n, 2) << "bottom and top, one spot each";
+      for (int i = 0; i < n; ++i) {
+        EXPECT_NEAR(c[i].depth, 0.001, 1e-9);
+        EXPECT_NEAR(std::abs(c[i].normal[0]), 1.0, 1e-9) << "along the face's normal";
+        EXPECT_NEAR(c[i].pos[1], sideways, 1e-9) << "on the disc's centre line, face first " << face_first;
+        EXPECT_NEAR(c[i].pos[0], 0.0695, 1e-9) << "midway between the face and the disc's deepest point";
+      }
+    }
+  }
+}
+
 TEST(UprightPrism, AgreesWithOdesMeshTestOnTouching) {
   OdeLibrary ode;
   OdeWorld world(dWorldCreate());
