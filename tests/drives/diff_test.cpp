@@ -3,10 +3,13 @@
 // backward and turning speeds within 3 % of the command; an arc of radius v/ω; speed-up
 // following the 2 m/s² limit within 5 % without wheel slip; braking after the command timeout;
 // wheel-speed commands (2 accepted, 3 refused); sideways commands dropped with a warning; the
-// motor's rotor inertia on the wheels' axles.
+// motor's rotor inertia on the wheels' axles. What a team meets is checked at both physics
+// profiles.
 #include <cmath>
 #include <filesystem>
+#include <ostream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -14,6 +17,7 @@
 
 #include <ode/ode.h>
 
+#include "../common/fast_profile_defects.hpp"
 #include "../common/edited_model_file.hpp"
 #include "diff_world.hpp"
 #include "physics/scene_graph.hpp"
@@ -58,15 +62,23 @@ Measured Average(DiffWorld& w, const MoveCommand& c, int n = 50) {
   return m;
 }
 
-TEST(DiffDrive, StandsLevelOnWheelsAndCastersWithoutDrifting) {
-  DiffWorld w;
-  for (int i = 0; i < 1000; ++i) w.world->Step();
+// The profiles a user meets: precise (the shipped worlds') and fast (one flag away).
+auto BothProfiles() { return ::testing::Values(std::string("precise"), std::string("fast")); }
+
+class DiffDrive : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(DiffDrive, StandsLevelOnWheelsAndCastersWithoutDrifting) {
+  DiffWorld w(GetParam());
+  w.Run(1.0);
   const RobotState r = w.Robot();
   EXPECT_NEAR(r.pose.position.x(), -3.0, 0.001);
   EXPECT_NEAR(r.pose.position.y(), 0.0, 0.001);
   EXPECT_NEAR(r.pose.position.z(), 0.045, 0.002);  // the centre of mass height
   EXPECT_LT(Tilt(r), 0.2 * M_PI / 180);
-  EXPECT_LT(r.twist.linear.norm(), 0.005);
+  EXPECT_LT(r.twist.linear.head<2>().norm(), 0.005);
+  // At fast the chassis buzzes on its wheels and caster springs in a 4-step cycle, up to
+  // 7.6 mm/s vertically (25 µm) measured; it stays where it was put.
+  EXPECT_LT(std::abs(r.twist.linear.z()), GetParam() == "fast" ? 0.01 : 0.005);
   EXPECT_LT(std::abs(r.twist.angular.z()), 0.01);
 }
 
@@ -75,12 +87,15 @@ struct VelocityCase {
   double forward, angular;
   double start_x;  // m; backward runs start mid-field
 };
+// gtest names a failing case by its name, not by its bytes.
+void PrintTo(const VelocityCase& c, std::ostream* os) { *os << c.name; }
 
-class DiffSteadyVelocity : public ::testing::TestWithParam<VelocityCase> {};
+class DiffSteadyVelocity : public ::testing::TestWithParam<std::tuple<std::string, VelocityCase>> {};
 
 TEST_P(DiffSteadyVelocity, WithinThreePercentOfTheCommand) {
-  const VelocityCase c = GetParam();
-  DiffWorld w(c.start_x);
+  if (std::get<0>(GetParam()) == "fast" && std::get<1>(GetParam()).forward == 0) GTEST_SKIP() << testing::kDiffRobotSlipsAtSixSweeps;
+  const VelocityCase c = std::get<1>(GetParam());
+  DiffWorld w(std::get<0>(GetParam()), c.start_x);
   const LocalVelocityCommand cmd{c.forward, 0.0, c.angular};
   w.Drive(cmd, 1.5);
   const Vec3 before = w.Robot().pose.position;
@@ -101,13 +116,17 @@ TEST_P(DiffSteadyVelocity, WithinThreePercentOfTheCommand) {
 
 INSTANTIATE_TEST_SUITE_P(
     Commands, DiffSteadyVelocity,
-    ::testing::Values(VelocityCase{"forward", 1.0, 0.0, -3.0}, VelocityCase{"full_speed", 2.0, 0.0, -3.5},
-                      VelocityCase{"backward", -1.0, 0.0, 0.0}, VelocityCase{"turning", 0.0, 4.0, -3.0},
-                      VelocityCase{"turning_fast", 0.0, -8.0, -3.0}),
-    [](const auto& info) { return std::string(info.param.name); });
+    ::testing::Combine(BothProfiles(),
+                       ::testing::Values(VelocityCase{"forward", 1.0, 0.0, -3.0},
+                                         VelocityCase{"full_speed", 2.0, 0.0, -3.5},
+                                         VelocityCase{"backward", -1.0, 0.0, 0.0},
+                                         VelocityCase{"turning", 0.0, 4.0, -3.0},
+                                         VelocityCase{"turning_fast", 0.0, -8.0, -3.0})),
+    [](const auto& info) { return std::get<0>(info.param) + "_" + std::get<1>(info.param).name; });
 
-TEST(DiffDrive, AnArcHasRadiusSpeedOverTurnRate) {
-  DiffWorld w(0.0, 0.0);
+TEST_P(DiffDrive, AnArcHasRadiusSpeedOverTurnRate) {
+  if (GetParam() == "fast") GTEST_SKIP() << testing::kDiffRobotSlipsAtSixSweeps;
+  DiffWorld w(GetParam(), 0.0, 0.0);
   const LocalVelocityCommand cmd{0.8, 0.0, 2.0};  // 0.4 m radius, the figure-8's kind of turn
   w.Drive(cmd, 1.0);
   // Fit a circle (algebraic least squares) to the path over the next 2 s, about 1.3 turns.
@@ -131,8 +150,8 @@ TEST(DiffDrive, AnArcHasRadiusSpeedOverTurnRate) {
   EXPECT_LT(worst, 0.01);  // a circle, not a spiral
 }
 
-TEST(DiffDrive, SpeedUpFollowsTheAccelerationLimitWithoutWheelSlip) {
-  DiffWorld w(-3.5);
+TEST_P(DiffDrive, SpeedUpFollowsTheAccelerationLimitWithoutWheelSlip) {
+  DiffWorld w(GetParam(), -3.5);
   // Commanded 2 m/s forward: with the paper's 2 m/s² the robot needs 1 s.
   std::vector<double> t, v;
   double worst_slip = 0;
@@ -154,26 +173,32 @@ TEST(DiffDrive, SpeedUpFollowsTheAccelerationLimitWithoutWheelSlip) {
   ASSERT_GT(n, 20);
   const double slope = (n * stv - st * sv) / (n * stt - st * st);
   EXPECT_NEAR(slope, 2.0, 0.05 * 2.0);
-  EXPECT_LT(worst_slip, 0.03);
+  // At precise: the slip band was met at 1 ms (12 mm/s). At fast the wheels slip up to 44 mm/s
+  // early in the ramp, measured; nothing checks that band at fast (the wheels' unconverged
+  // friction at 6 solver iterations, as in the turning cases).
+  if (GetParam() == "precise") {
+    EXPECT_LT(worst_slip, 0.03);
+  }
   EXPECT_NEAR(v.back(), 2.0, 0.03 * 2.0);
   EXPECT_LT(Tilt(w.Robot()), 1.0 * M_PI / 180);  // the casters keep it level
 }
 
-TEST(DiffDrive, BrakesToAStopAfterTheCommandTimeout) {
-  DiffWorld w;
+TEST_P(DiffDrive, BrakesToAStopAfterTheCommandTimeout) {
+  DiffWorld w(GetParam());
   w.Drive(LocalVelocityCommand{1.5, 0.0, 0.0}, 1.5);
   EXPECT_GT(w.LocalVelocity().x(), 1.45);
   // The last command was 10 ms ago: 80 ms later it still holds (timeout 0.1 s) …
-  for (int i = 0; i < 80; ++i) w.world->Step();
+  w.Run(0.08);
   EXPECT_GT(w.LocalVelocity().x(), 1.45);
   // … then the servo brakes at 4 m/s² (0.375 s from 1.5 m/s).
-  for (int i = 0; i < 500; ++i) w.world->Step();
+  w.Run(0.5);
   EXPECT_LT(w.Robot().twist.linear.norm(), 0.02);
   EXPECT_LT(std::abs(w.Robot().twist.angular.z()), 0.05);
 }
 
-TEST(DiffDrive, FollowsTwoWheelSpeedsLeftThenRight) {
-  DiffWorld w(0.0);
+TEST_P(DiffDrive, FollowsTwoWheelSpeedsLeftThenRight) {
+  if (GetParam() == "fast") GTEST_SKIP() << testing::kDiffRobotSlipsAtSixSweeps;
+  DiffWorld w(GetParam(), 0.0);
   const double left = 10, right = 20;  // rad/s
   const Measured m = (w.Drive(WheelSpeedCommand{{left, right}}, 1.0), Average(w, WheelSpeedCommand{{left, right}}));
   const double v = 0.5 * kWheelRadius * (left + right);
@@ -183,16 +208,16 @@ TEST(DiffDrive, FollowsTwoWheelSpeedsLeftThenRight) {
   EXPECT_EQ(w.world->event_counters().rejected, 0);
 }
 
-TEST(DiffDrive, WheelSpeedCommandWithThreeSpeedsIsRefused) {
-  DiffWorld w;
+TEST(DiffDriveModel, WheelSpeedCommandWithThreeSpeedsIsRefused) {
+  DiffWorld w("fast");
   w.world->events().Post(CommandEvent{{Team::kBlue, 0}, WheelSpeedCommand{{1.0, 2.0, 3.0}}, {}, {}});
   w.world->ProcessEvents();
   EXPECT_EQ(w.world->event_counters().rejected, 1);
   EXPECT_NE(w.text.str().find("3 speeds, this robot has 2 wheels"), std::string::npos) << w.text.str();
 }
 
-TEST(DiffDrive, SidewaysCommandIsFollowedWithoutTheLateralPartAndWarnedRarely) {
-  DiffWorld w;
+TEST_P(DiffDrive, SidewaysCommandIsFollowedWithoutTheLateralPartAndWarnedRarely) {
+  DiffWorld w(GetParam());
   const LocalVelocityCommand cmd{0.5, 1.0, 0.0};
   w.Drive(cmd, 1.5);  // 150 commands
   const Measured m = Average(w, cmd);
@@ -207,8 +232,8 @@ TEST(DiffDrive, SidewaysCommandIsFollowedWithoutTheLateralPartAndWarnedRarely) {
   EXPECT_EQ(w.world->event_counters().rejected, 0);
 }
 
-TEST(DiffDrive, GlobalCommandIsTurnedIntoTheRobotFrame) {
-  DiffWorld w(0.0, -2.0, M_PI / 2);  // facing +y
+TEST_P(DiffDrive, GlobalCommandIsTurnedIntoTheRobotFrame) {
+  DiffWorld w(GetParam(), 0.0, -2.0, M_PI / 2);  // facing +y
   const GlobalVelocityCommand along{0.0, 1.0, 0.0};
   w.Drive(along, 1.5);
   const Measured m = Average(w, along);
@@ -217,7 +242,7 @@ TEST(DiffDrive, GlobalCommandIsTurnedIntoTheRobotFrame) {
   EXPECT_EQ(Count(w.text.str(), "cannot move sideways"), 0) << w.text.str();
 
   // Across the heading: nothing a diff robot can follow; it stays and warns.
-  DiffWorld across(0.0, 0.0, M_PI / 2);
+  DiffWorld across(GetParam(), 0.0, 0.0, M_PI / 2);
   const GlobalVelocityCommand sideways{1.0, 0.0, 0.0};
   across.Drive(sideways, 1.0);
   EXPECT_LT(across.Robot().twist.linear.norm(), 0.02);
@@ -225,13 +250,16 @@ TEST(DiffDrive, GlobalCommandIsTurnedIntoTheRobotFrame) {
   EXPECT_GE(Count(across.text.str(), "cannot move sideways"), 1) << across.text.str();
 }
 
+INSTANTIATE_TEST_SUITE_P(BothProfiles, DiffDrive, BothProfiles(),
+                         [](const auto& info) { return info.param; });
+
 // The motor's rotor turns with the wheel through its gears: `motor.rotor_inertia` adds to each
 // wheel's inertia about its axle and nothing to its mass, as on the omni drive.
-TEST(DiffDrive, TheRotorAddsInertiaAboutTheAxleOnly) {
+TEST(DiffDriveModel, TheRotorAddsInertiaAboutTheAxleOnly) {
   const double rotor = 2.0e-5;
   const std::string file = testing::EditedModelFile(kDiffRobot, "  motor:\n", "  motor:\n    rotor_inertia: 2.0e-5\n",
                                                     "ubersim-diff-rotor-robot");
-  DiffWorld w(-3.0, 0.0, 0.0, file);
+  DiffWorld w("fast", -3.0, 0.0, 0.0, file);
   std::filesystem::remove(file);
   const double r = kWheelRadius, width = 0.012, mass = 0.05;  // models/robots/cmdragons-2003-diff.yaml
   int wheels = 0;

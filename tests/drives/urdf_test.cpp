@@ -4,9 +4,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
+#include "../common/fast_profile_defects.hpp"
 #include "omni_world.hpp"
 #include "model/urdf.hpp"
 #include "world/world_attorney.hpp"
@@ -37,43 +40,59 @@ TEST(Urdf, TheShippedRobotHasAMeshShellAndTheRightMass) {
   EXPECT_NEAR(min_x, -0.09, 1e-4);  // the round back
 }
 
-struct Twins : ::testing::TestWithParam<LocalVelocityCommand> {};
+struct Twins : ::testing::TestWithParam<std::tuple<std::string, LocalVelocityCommand>> {};
 
 TEST_P(Twins, UrdfRobotDrivesLikeItsYamlTwin) {
-  OmniWorld yaml(kOmniRobot);
-  OmniWorld urdf(kUrdfRobot);
-  const LocalVelocityCommand c = GetParam();
+  const std::string& profile = std::get<0>(GetParam());
+  OmniWorld yaml(profile, kOmniRobot);
+  OmniWorld urdf(profile, kUrdfRobot);
+  const LocalVelocityCommand c = std::get<1>(GetParam());
   yaml.Drive(c, 1.5);
   urdf.Drive(c, 1.5);
   const Vec3 vy = yaml.LocalVelocity(), vu = urdf.LocalVelocity();
-  const double speed = std::max(0.1, std::hypot(c.forward, c.left));
-  // Both within the 3 % validation band of the command, so of each other.
-  EXPECT_NEAR(vu.x(), c.forward, 0.03 * speed);
-  EXPECT_NEAR(vu.y(), c.left, 0.03 * speed);
-  EXPECT_NEAR(vu.x(), vy.x(), 0.03 * speed);
-  EXPECT_NEAR(vu.y(), vy.y(), 0.03 * speed);
+  const double speed = std::hypot(c.forward, c.left);
+  // Both within the 3 % validation band of the command, so of each other. Turning on the spot
+  // the centre moves 3 mm/s at most, at fast 10 mm/s: two solver sweeps lean the wheel-body robot
+  // 1.5° on its hinges (docs/collision.md) and its centre circles 2.6 mm off the axis (7.8 mm/s
+  // measured at 3 rad/s, both twins alike).
+  const double band = speed > 0 ? 0.03 * speed : profile == "fast" ? 0.01 : 0.003;
+  EXPECT_NEAR(vu.x(), c.forward, band);
+  EXPECT_NEAR(vu.y(), c.left, band);
+  EXPECT_NEAR(vu.x(), vy.x(), band);
+  EXPECT_NEAR(vu.y(), vy.y(), band);
   EXPECT_NEAR(urdf.Robot().twist.angular.z(), c.angular, 0.03 * std::max(1.0, std::abs(c.angular)));
   EXPECT_NEAR(urdf.Robot().pose.position.z(), yaml.Robot().pose.position.z(), 0.002);
 }
 
 INSTANTIATE_TEST_SUITE_P(Commands, Twins,
-                         ::testing::Values(LocalVelocityCommand{1.0, 0.0, 0.0},
-                                           LocalVelocityCommand{0.0, 1.0, 0.0},
-                                           LocalVelocityCommand{0.0, 0.0, 3.0}));
+                         ::testing::Combine(BothProfiles(),
+                                            ::testing::Values(LocalVelocityCommand{1.0, 0.0, 0.0},
+                                                              LocalVelocityCommand{0.0, 1.0, 0.0},
+                                                              LocalVelocityCommand{0.0, 0.0, 3.0})),
+                         [](const auto& info) {
+                           const LocalVelocityCommand& c = std::get<1>(info.param);
+                           const char* what = c.angular != 0 ? "turning" : c.left != 0 ? "sideways" : "forward";
+                           return std::get<0>(info.param) + "_" + what;
+                         });
 
-TEST(Urdf, TheMeshShellCollidesWithTheBall) {
-  OmniWorld w(kUrdfRobot);
+class UrdfBall : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(UrdfBall, TheMeshShellCollidesWithTheBall) {
+  if (GetParam() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
+  OmniWorld w(GetParam(), kUrdfRobot);
   // Roll the ball at the robot's flat front (robot at x = -2 facing +x).
   w.world->events().Post(PositionEvent{Target::Ball(), Vec3(-1.5, 0.0, 0.0), std::nullopt,
-                                       Vec3(-2.0, 0.0, 0.0), Vec3(0, -2.0 / 0.0215, 0), std::nullopt});
+                                       Vec3(-2.0, 0.0, 0.0), Vec3(0, -2.0 / 0.0215, 0), std::nullopt, {}});
   double min_x = 0;
-  for (int i = 0; i < 600; ++i) {
+  for (int i = w.Steps(0.6); i > 0; --i) {
     w.world->Step();
     min_x = std::min(min_x, WorldAttorney::Ball(*w.world).GetPose().position.x());
   }
   EXPECT_GT(min_x, -2.0 + 0.07 + 0.0215 - 0.003) << "the ball went into the shell";
   EXPECT_GT(WorldAttorney::Ball(*w.world).GetTwist().linear.x(), 0.1) << "the ball should bounce back";
 }
+
+INSTANTIATE_TEST_SUITE_P(BothProfiles, UrdfBall, BothProfiles(), ProfileName);
 
 fs::path WriteTemp(const std::string& name, const std::string& text) {
   const fs::path dir = fs::temp_directory_path() / ("ubersim_urdf_" + std::to_string(::getpid()));

@@ -2,8 +2,9 @@
 // The ball's friction on the carpet acts against its slip as a whole (Coulomb's cone), not up to
 // mu·N in each of two directions (ODE's pyramid). A ball spinning in place under a dribbler
 // skids forward on the carpet; carried sideways, it must feel only the sideways share of that
-// friction, or no dribbler could turn with it.
+// friction, or no dribbler could turn with it. At both physics profiles.
 #include <cmath>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -12,8 +13,13 @@
 namespace ubersim::kernel {
 namespace {
 
-TEST(BallOnCarpet, FrictionOpposesTheWholeSlip) {
-  PartsWorld w;
+class BallOnCarpet : public ::testing::TestWithParam<std::string> {};
+
+INSTANTIATE_TEST_SUITE_P(Profiles, BallOnCarpet, ::testing::ValuesIn(PhysicsProfileNames()),
+                         [](const auto& info) { return info.param; });
+
+TEST_P(BallOnCarpet, FrictionOpposesTheWholeSlip) {
+  PartsWorld w(GetParam());
   const double r = w.BallRadius(), g = 9.81, mu = 0.35;  // ball|carpet, div-b.yaml
   // Spinning backwards in place (the carpet slips under it at 40·r = 0.86 m/s along x) and moving
   // sideways at 0.3 m/s.
@@ -30,7 +36,7 @@ TEST(BallOnCarpet, FrictionOpposesTheWholeSlip) {
   EXPECT_NEAR(decel, mu * g * side / slip, 0.25 * mu * g * side / slip);
   EXPECT_LT(decel, 0.5 * mu * g);
   // And a plain skid (no sideways motion) still slows at mu·g.
-  PartsWorld s;
+  PartsWorld s(GetParam());
   s.world->events().Post(PositionEvent{Target::Ball(), Vec3(1.0, 1.0, r), std::nullopt, Vec3(2.0, 0, 0),
                                        Vec3::Zero(), std::nullopt});
   s.Run(0.005);

@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
+#include "../common/fast_profile_defects.hpp"
 #include "../common/edited_model_file.hpp"
 #include "parts_world.hpp"
 #include "world/world_attorney.hpp"
@@ -36,9 +38,13 @@ enum class BarModel { kSurface, kHinge };
 
 std::string HingeBarRobot();
 
-class RollerDribbler : public ::testing::TestWithParam<BarModel> {
+// Each bar model at each physics profile: holding the ball is what a team meets at either.
+class RollerDribbler : public ::testing::TestWithParam<std::tuple<BarModel, std::string>> {
  protected:
-  static std::string RobotFile() { return GetParam() == BarModel::kSurface ? std::string(kModernRobot) : HingeBarRobot(); }
+  static std::string RobotFile() {
+    return std::get<0>(GetParam()) == BarModel::kSurface ? std::string(kModernRobot) : HingeBarRobot();
+  }
+  static std::string Profile() { return std::get<1>(GetParam()); }
 };
 
 // The modern robot file with its bar on a hinge, written once per test process.
@@ -48,8 +54,20 @@ std::string HingeBarRobot() {
   return file;
 }
 
-INSTANTIATE_TEST_SUITE_P(BarModels, RollerDribbler, ::testing::Values(BarModel::kSurface, BarModel::kHinge),
-                         [](const auto& info) { return info.param == BarModel::kSurface ? "SurfaceBar" : "HingeBar"; });
+INSTANTIATE_TEST_SUITE_P(BarModels, RollerDribbler,
+                         ::testing::Combine(::testing::Values(BarModel::kSurface, BarModel::kHinge),
+                                            ::testing::ValuesIn(PhysicsProfileNames())),
+                         [](const auto& info) {
+                           return std::string(std::get<0>(info.param) == BarModel::kSurface ? "SurfaceBar_"
+                                                                                             : "HingeBar_") +
+                                  std::get<1>(info.param);
+                         });
+
+// The dribbler tests outside that list, at each profile.
+class RollerDribblerAtProfile : public ::testing::TestWithParam<std::string> {};
+
+INSTANTIATE_TEST_SUITE_P(Profiles, RollerDribblerAtProfile, ::testing::ValuesIn(PhysicsProfileNames()),
+                         [](const auto& info) { return info.param; });
 
 double Distance(PartsWorld& w) {
   const Vec3 b = w.BallInRobotFrame();
@@ -57,7 +75,7 @@ double Distance(PartsWorld& w) {
 }
 
 TEST_P(RollerDribbler, TouchesBallReportsTheContact) {
-  PartsWorld w(RobotFile());
+  PartsWorld w(Profile(), RobotFile());
   w.Run(0.2, std::nullopt, std::nullopt, kDribble);
   EXPECT_FALSE(w.Robot().dribbler_ball_contact) << "the ball is 5 m away";
   w.PlaceBallInMouth();
@@ -69,7 +87,7 @@ TEST_P(RollerDribbler, TouchesBallReportsTheContact) {
 }
 
 TEST_P(RollerDribbler, ARobotTakenOffTheFieldReportsNoContact) {
-  PartsWorld w(RobotFile());
+  PartsWorld w(Profile(), RobotFile());
   w.PlaceBallInMouth();
   w.Run(0.01, std::nullopt, std::nullopt, kDribble);
   ASSERT_TRUE(w.Robot().dribbler_ball_contact);
@@ -83,7 +101,8 @@ TEST_P(RollerDribbler, ARobotTakenOffTheFieldReportsNoContact) {
 }
 
 TEST_P(RollerDribbler, SpinsTheBallBackAgainstTheRobot) {
-  PartsWorld w(RobotFile());
+  if (Profile() == "fast" && std::get<0>(GetParam()) == BarModel::kSurface) GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
+  PartsWorld w(Profile(), RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   w.Run(0.5, std::nullopt, std::nullopt, kDribble);
@@ -95,7 +114,8 @@ TEST_P(RollerDribbler, SpinsTheBallBackAgainstTheRobot) {
 }
 
 TEST_P(RollerDribbler, DribblingLeavesTheRobotStandingStill) {
-  PartsWorld w(RobotFile());
+  if (Profile() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
+  PartsWorld w(Profile(), RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   const RobotState before = w.Robot();
@@ -108,7 +128,8 @@ TEST_P(RollerDribbler, DribblingLeavesTheRobotStandingStill) {
 }
 
 TEST_P(RollerDribbler, HoldsTheBallThroughADriveAndATurn) {
-  PartsWorld w(RobotFile());
+  if (Profile() == "fast" && std::get<0>(GetParam()) == BarModel::kSurface) GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
+  PartsWorld w(Profile(), RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   w.Run(0.3, std::nullopt, std::nullopt, kDribble);
@@ -133,7 +154,7 @@ TEST_P(RollerDribbler, HoldsTheBallThroughADriveAndATurn) {
 TEST_P(RollerDribbler, WithoutTheRollerTheBallIsLostWhenBraking) {
   // The same drive with the dribbler off: the ball rolls on when the robot brakes. This is what
   // the hold test above would see if the roller did nothing.
-  PartsWorld w(RobotFile());
+  PartsWorld w(Profile(), RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   w.Run(1.0 + 1.0 / 6.0 - 1.0 / 12.0, LocalVelocityCommand{1.0, 0, 0}, std::nullopt, 0.0);
@@ -143,7 +164,7 @@ TEST_P(RollerDribbler, WithoutTheRollerTheBallIsLostWhenBraking) {
 
 TEST_P(RollerDribbler, LosesTheBallOnAFastSpin) {
   for (double spin : {8.0, 10.0}) {
-    PartsWorld w(RobotFile());
+    PartsWorld w(Profile(), RobotFile());
     w.Run(0.2);
     w.PlaceBallInMouth();
     w.Run(0.3, std::nullopt, std::nullopt, kDribble);
@@ -155,7 +176,8 @@ TEST_P(RollerDribbler, LosesTheBallOnAFastSpin) {
 }
 
 TEST_P(RollerDribbler, HoldsWhileSpinningSlowly) {
-  PartsWorld w(RobotFile());
+  if (Profile() == "fast" && std::get<0>(GetParam()) == BarModel::kSurface) GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
+  PartsWorld w(Profile(), RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
   w.Run(0.3, std::nullopt, std::nullopt, kDribble);
@@ -164,8 +186,8 @@ TEST_P(RollerDribbler, HoldsWhileSpinningSlowly) {
   EXPECT_LT(t.worst, 0.01);
 }
 
-TEST(RollerDribblerHinge, SpeedIsClampedToTheMaximum) {
-  PartsWorld w(HingeBarRobot());
+TEST_P(RollerDribblerAtProfile, HingeBarSpeedIsClampedToTheMaximum) {
+  PartsWorld w(GetParam(), HingeBarRobot());
   w.Run(0.2);
   w.Run(0.5, std::nullopt, std::nullopt, 1e4);
   const NodeImpl* node = WorldAttorney::Scene(*w.world).Find("blue/0/dribbler");
@@ -175,11 +197,12 @@ TEST(RollerDribblerHinge, SpeedIsClampedToTheMaximum) {
   EXPECT_NEAR(axle->Rate(), 150.0, 1.0);
 }
 
-TEST(RollerDribblerSurface, SpeedIsClampedToo) {
+TEST_P(RollerDribblerAtProfile, SurfaceBarSpeedIsClampedToo) {
+  if (GetParam() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   // The surface bar has no axle: a held ball spins as fast with 10⁴ rad/s commanded as with the
   // maximum, and slower at half of it.
   auto spin = [](double command) {
-    PartsWorld w;
+    PartsWorld w(GetParam());
     w.Run(0.2);
     w.PlaceBallInMouth();
     w.Run(0.5, std::nullopt, std::nullopt, command);
@@ -189,12 +212,14 @@ TEST(RollerDribblerSurface, SpeedIsClampedToo) {
   EXPECT_GT(at_max, 20.0);
   EXPECT_NEAR(spin(1e4), at_max, 0.01 * at_max);
   EXPECT_LT(spin(0.5 * kDribble), 0.75 * at_max);
-  EXPECT_EQ(WorldAttorney::Scene(*PartsWorld().world).Find("blue/0/dribbler")->FindJoint("axle"), nullptr) << "no hinge";
+  const PartsWorld plain(GetParam());
+  EXPECT_EQ(WorldAttorney::Scene(*plain.world).Find("blue/0/dribbler")->FindJoint("axle"), nullptr) << "no hinge";
 }
 
-TEST(RollerDribblerModels, The2003RobotAndTheUrdfTwinHoldTheBallToo) {
+TEST_P(RollerDribblerAtProfile, The2003RobotAndTheUrdfTwinHoldTheBallToo) {
+  if (GetParam() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   for (const char* file : {k2003Robot, kModernUrdfRobot}) {
-    PartsWorld w(file);
+    PartsWorld w(GetParam(), file);
     w.Run(0.2);
     w.PlaceBallInMouth();
     w.Run(0.3, std::nullopt, std::nullopt, kDribble);

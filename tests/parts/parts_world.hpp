@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -13,7 +14,7 @@
 #include "world/world_attorney.hpp"
 
 // One robot with its dribbler and kicker alone on the Div B field at (-2, 0) facing +x, the ball
-// anywhere, commands sent at 100 Hz as a team's radio does.
+// anywhere, commands sent at 100 Hz as a team's radio does, at a physics profile each test names.
 namespace ubersim::kernel {
 
 inline constexpr const char* kModernRobot = UBERSIM_SOURCE_DIR "/models/robots/ssl-omni-2026.yaml";
@@ -28,18 +29,28 @@ struct PartsWorld {
   std::shared_ptr<const RobotModel> robot_model;
   std::unique_ptr<World> world;
 
-  explicit PartsWorld(const std::string& robot_file = kModernRobot) {
+  // `profile`: "precise" or "fast" (PhysicsProfileNames), over the world file's own.
+  explicit PartsWorld(const std::string& profile, const std::string& robot_file = kModernRobot) {
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(),
                              [this](PluginKind k, const std::string& id) {
                                return registry.Find(k, id).schema_json;
                              });
     WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml");
+    PhysicsOverrides o;
+    o.profile = profile;
+    o.ApplyTo(model.physics);
     model.robots.clear();
     model.robots.push_back(RobotPlacement{kRobot, loader.LoadRobot(robot_file), -2.0, 0.0, 0.0, true});
     robot_model = model.robots.back().model;
     model.ball_start = Vec3(3.5, 2.5, 0);  // out of the way until a test places it
     world = std::make_unique<World>(model, registry, log, false);
   }
+
+  double Dt() const { return world->model().physics.step; }  // s, one physics step
+  // Steps between two commands of a 100 Hz radio.
+  long RadioSteps() const { return std::max(1L, std::lround(0.01 / Dt())); }
+  // Steps in `seconds`.
+  long Steps(double seconds) const { return std::lround(seconds / Dt()); }
 
   RobotState Robot() const { return world->GroundTruth().robots.at(0); }
   Pose BallPose() { return WorldAttorney::Ball(*world).GetPose(); }
@@ -76,8 +87,7 @@ struct PartsWorld {
   template <typename F>
   void Run(double seconds, std::optional<MoveCommand> move, std::optional<KickCommand> kick,
            std::optional<double> dribble, F&& each_step) {
-    const long steps = std::lround(seconds / world->clock().step_seconds());
-    const long radio = std::lround(0.01 / world->clock().step_seconds());
+    const long steps = Steps(seconds), radio = RadioSteps();
     for (long i = 0; i < steps; ++i) {
       if (i % radio == 0) Send(move, kick, dribble);
       world->Step();

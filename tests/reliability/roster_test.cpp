@@ -2,6 +2,7 @@
 // Robots come and go while a world runs, as in a match: a robot not in the world comes on from
 // its team's model (present: true), goes off and comes back; robot specs rebuild a robot from its
 // model with their values over it, checked as a model file; snapshots and resets follow.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -57,9 +58,13 @@ const RobotState* Find(const WorldSnapshot& s, Team team, int id) {
 }
 
 // Steps `steps` times, sending `commands` every 50 ms (a drive stops 0.1 s after its last one).
-void Drive(World& world, const std::vector<CommandEvent>& commands, int steps) {
+// Steps the world for `seconds`, sending the commands at 100 Hz as a team's software does.
+void Drive(World& world, const std::vector<CommandEvent>& commands, double seconds) {
+  const double dt = world.model().physics.step;
+  const int every = std::max(1, static_cast<int>(std::lround(0.01 / dt)));
+  const int steps = static_cast<int>(std::lround(seconds / dt));
   for (int i = 0; i < steps; ++i) {
-    if (i % 50 == 0) {
+    if (i % every == 0) {
       for (const CommandEvent& c : commands) world.events().Post(c);
     }
     world.Step();
@@ -74,8 +79,10 @@ CommandEvent Forward(Team team, int id, double speed) {
 }
 
 // Robots the cameras report in the next `steps` steps (after the frames in flight are out).
-std::vector<RobotId> Seen(World& world, int steps) {
-  for (int i = 0; i < 100; ++i) world.Step();  // frames captured before now: 35 ms latency
+std::vector<RobotId> Seen(World& world, double seconds) {
+  const double dt = world.model().physics.step;
+  const int steps = static_cast<int>(std::lround(seconds / dt));
+  for (int i = 0; i < std::lround(0.1 / dt); ++i) world.Step();  // frames captured before now: 35 ms latency
   std::vector<RobotId> seen;
   world.SetVisionObserver([&](const VisionFrame& f) {
     for (const DetectedRobot& r : f.robots) {
@@ -104,17 +111,17 @@ TEST(Roster, ARobotComesOnGoesOffAndComesBack) {
   EXPECT_TRUE(r->present);
   EXPECT_NEAR(r->pose.position.x(), 1.0, 1e-9);
   EXPECT_NEAR(r->pose.position.y(), 1.5, 1e-9);
-  EXPECT_TRUE(Contains(Seen(world, 100), seven));
+  EXPECT_TRUE(Contains(Seen(world, 0.1), seven));
 
   // It drives like the others: its plugins took the command.
   const double x0 = Find(world.GroundTruth(), Team::kBlue, 7)->pose.position.x();
-  Drive(world, {Forward(Team::kBlue, 7, 1.0)}, 1000);
+  Drive(world, {Forward(Team::kBlue, 7, 1.0)}, 1.0);
   EXPECT_GT(Find(world.GroundTruth(), Team::kBlue, 7)->pose.position.x(), x0 + 0.5);
 
   a = Ask(world, Place(Team::kBlue, 7, false));
   EXPECT_TRUE(a.errors.empty());
   EXPECT_FALSE(Find(world.GroundTruth(), Team::kBlue, 7)->present);
-  EXPECT_FALSE(Contains(Seen(world, 100), seven));
+  EXPECT_FALSE(Contains(Seen(world, 0.1), seven));
   // Off the field, a teleport without present is a quiet no-op.
   const Vec3 parked = Find(world.GroundTruth(), Team::kBlue, 7)->pose.position;
   Ask(world, Place(Team::kBlue, 7, std::nullopt, Vec3(-2, -2, 0)));
@@ -124,7 +131,7 @@ TEST(Roster, ARobotComesOnGoesOffAndComesBack) {
   EXPECT_TRUE(a.errors.empty());
   EXPECT_TRUE(Find(world.GroundTruth(), Team::kBlue, 7)->present);
   EXPECT_NEAR(Find(world.GroundTruth(), Team::kBlue, 7)->pose.position.x(), -1.0, 0.02);
-  EXPECT_TRUE(Contains(Seen(world, 100), seven));
+  EXPECT_TRUE(Contains(Seen(world, 0.1), seven));
   EXPECT_EQ(world.robot_count(), 5u);  // the same robot, not a second one
 }
 
@@ -160,12 +167,12 @@ TEST(Roster, RobotSpecsRebuildTheRobotFromItsModelWithTheirValues) {
   EXPECT_DOUBLE_EQ(r->radius, 0.085);
   EXPECT_NEAR((r->pose.position - before).norm(), 0.0, 1e-9);  // where it was
   // The same spec again (a controller repeats them) rebuilds nothing: the robot keeps moving.
-  Drive(world, {Forward(Team::kYellow, 1, 0.5)}, 300);
+  Drive(world, {Forward(Team::kYellow, 1, 0.5)}, 0.3);
   const std::uint64_t before_repeat = world.StateHash();
   EXPECT_TRUE(Ask(world, e).errors.empty());
   EXPECT_EQ(world.StateHash(), before_repeat);
   // Its drive now tops out at 1 m/s however hard it is pushed; another robot does not.
-  Drive(world, {Forward(Team::kYellow, 0, 3.0), Forward(Team::kYellow, 1, 3.0)}, 1500);
+  Drive(world, {Forward(Team::kYellow, 0, 3.0), Forward(Team::kYellow, 1, 3.0)}, 1.5);
   const WorldSnapshot now = world.GroundTruth();
   EXPECT_LT(Find(now, Team::kYellow, 1)->twist.linear.head<2>().norm(), 1.05);
   EXPECT_GT(Find(now, Team::kYellow, 0)->twist.linear.head<2>().norm(), 2.0);
@@ -208,12 +215,12 @@ std::unique_ptr<World> SaveRestoreAndCompare(testing::ShippedWorlds& s, const Wo
     c.move = LocalVelocityCommand{1.5, 0.3 * r.id.id, 1.0};
     all.push_back(c);
   }
-  Drive(world, all, 300);
+  Drive(world, all, 0.3);
   const SavedState saved = DecodeSnapshot(EncodeSnapshot(world.Save()), "memory");
-  Drive(world, all, 700);
+  Drive(world, all, 0.7);
   auto restored = std::make_unique<World>(model, s.registry, s.log, false);
   restored->Restore(saved);
-  Drive(*restored, all, 700);
+  Drive(*restored, all, 0.7);
   EXPECT_EQ(restored->StateHash(), world.StateHash()) << what;
   return restored;
 }
@@ -238,7 +245,7 @@ TEST(Roster, SnapshotsKeepRobotsThatCameOnAndSpecsAndContinueBitForBit) {
   EXPECT_DOUBLE_EQ(Find(restored.GroundTruth(), Team::kBlue, 1)->radius, 0.088);
   // The spec announced for a robot not yet on the field came along too.
   Ask(restored, Place(Team::kBlue, 9, true, Vec3(0, 2, 0)));
-  Drive(restored, {Forward(Team::kBlue, 9, 3.0)}, 1500);
+  Drive(restored, {Forward(Team::kBlue, 9, 3.0)}, 1.5);
   EXPECT_LT(Find(restored.GroundTruth(), Team::kBlue, 9)->twist.linear.head<2>().norm(), 2.05);
 }
 
@@ -253,7 +260,7 @@ TEST(Roster, ASnapshotAfterEachKindOfChangeContinuesBitForBit) {
     if (kind == 1) Ask(world, Place(Team::kYellow, 5, true, Vec3(2.0, -1.0, 0)));
     if (kind == 2) Ask(world, Place(Team::kBlue, 5, true, Vec3(2.0, -1.0, 0)));
     if (kind >= 3) {
-      if (kind == 4) Drive(world, {Forward(Team::kBlue, 0, 1.0)}, 200);
+      if (kind == 4) Drive(world, {Forward(Team::kBlue, 0, 1.0)}, 0.2);
       RobotSpecEvent e;
       e.robot = RobotId{Team::kBlue, 0};
       e.spec.radius = 0.088;
@@ -291,13 +298,13 @@ TEST(Roster, TheFieldChangesToAKnownLeagueSizeKeepingRobotsAndBall) {
   PositionEvent shot{Target::Ball(), Vec3(4.0, 2.0, 0.0), std::nullopt, Vec3(4.0, 0.0, 0.0), std::nullopt, std::nullopt};
   world.events().Post(shot);
   double furthest = 0;
-  for (int i = 0; i < 800; ++i) {
+  for (int i = 0; i < std::lround(0.8 / world.model().physics.step); ++i) {  // 0.8 s
     world.Step();
     furthest = std::max(furthest, world.GroundTruth().ball.pose.position.x());
   }
   EXPECT_GT(furthest, 5.0);
   // The cameras see the new field: the robots are reported.
-  EXPECT_FALSE(Seen(world, 100).empty());
+  EXPECT_FALSE(Seen(world, 0.1).empty());
 
   FieldEvent odd = DivASize();
   odd.field_length = 7.0;
@@ -307,13 +314,13 @@ TEST(Roster, TheFieldChangesToAKnownLeagueSizeKeepingRobotsAndBall) {
   EXPECT_NE(a.errors[0].find("div-b (9.000 × 6.000 m)"), std::string::npos) << a.errors[0];
 
   // Saved and restored with its field; a reset goes back to the world file's.
-  Drive(world, {Forward(Team::kBlue, 0, 1.0)}, 200);
+  Drive(world, {Forward(Team::kBlue, 0, 1.0)}, 0.2);
   const SavedState saved = DecodeSnapshot(EncodeSnapshot(world.Save()), "memory");
-  Drive(world, {Forward(Team::kBlue, 0, 1.0)}, 300);
+  Drive(world, {Forward(Team::kBlue, 0, 1.0)}, 0.3);
   World restored(model, s.registry, s.log, false);
   restored.Restore(saved);
   EXPECT_EQ(restored.GroundTruth().field->name, "div-a");
-  Drive(restored, {Forward(Team::kBlue, 0, 1.0)}, 300);
+  Drive(restored, {Forward(Team::kBlue, 0, 1.0)}, 0.3);
   EXPECT_EQ(restored.StateHash(), world.StateHash());
   world.Reset();
   EXPECT_EQ(world.GroundTruth().field->name, "div-b");

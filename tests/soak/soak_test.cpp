@@ -28,8 +28,14 @@ struct DivA : ::testing::Test {
   ModelLoader loader{ModelLoader::DefaultSchemaDir(),
                      [this](PluginKind k, const std::string& id) { return registry.Find(k, id).schema_json; }};
 
-  std::unique_ptr<World> Make() {
+  // The shipped Div A world, at its own profile or the one named.
+  std::unique_ptr<World> Make(const std::string& profile = "") {
     WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-a.yaml");
+    if (!profile.empty()) {
+      PhysicsOverrides o;
+      o.profile = profile;
+      o.ApplyTo(model.physics);
+    }
     model.transports.clear();
     return std::make_unique<World>(model, registry, log, false);
   }
@@ -145,47 +151,54 @@ TEST_F(DivA, ARobotPutIntoAGoalsBackWallFromBehindIsPushedBackOut) {
 // hulls, met each other in arbitrary directions and tipped it; tipped, the hulls met in ODE's
 // mesh test, whose normals pointed up. Robots meet through their hulls only now: put onto one
 // another, they part sideways and stay on the carpet.
+// Both profiles: at fast a wheel-body robot's hinges sag 1.5-2° at rest (two solver sweeps), and
+// a robot pushed out sideways leans up to 5.8° (measured; under 5.7° at precise).
 TEST_F(DivA, RobotsPutOntoOneAnotherPartSidewaysAndStayOnTheCarpet) {
-  auto world = Make();
-  const RobotId mover{Team::kYellow, 1}, resting{Team::kBlue, 6};
-  const Vec3 at(2.0, -2.0, 0.0);
-  auto state = [&](const RobotId& id) {
-    for (const RobotState& r : world->GroundTruth().robots) {
-      if (r.id == id) return r;
-    }
-    return RobotState{};
-  };
-  int index = 0;
-  for (double offset : {0.0, 0.03, 0.06, 0.09, 0.12, 0.15}) {
-    for (double heading : {0.3, 2.0, 4.0}) {
-      PositionEvent rest;
-      rest.target = Target::Robot(resting);
-      rest.position = at;
-      rest.yaw = 1.0;
-      rest.velocity = rest.angular_velocity = Vec3::Zero();
-      world->events().Post(rest);
-      PositionEvent onto;
-      onto.target = Target::Robot(mover);
-      onto.position = at + offset * Vec3(std::cos(heading), std::sin(heading), 0.0);
-      onto.yaw = heading;
-      onto.velocity = -3.0 * Vec3(std::cos(heading + 0.4), std::sin(heading + 0.4), 0.0);
-      onto.angular_velocity = Vec3::Zero();
-      world->events().Post(onto);
-      double highest = 0.0, most_tilt = 0.0;
-      for (int step = 0; step < 600; ++step) {
-        world->Step();
-        for (const RobotId& id : {mover, resting}) {
-          const RobotState r = state(id);
-          highest = std::max(highest, r.pose.position.z());
-          most_tilt = std::max(most_tilt, std::acos(std::min(1.0, (r.pose.orientation * Vec3::UnitZ()).z())));
-        }
+  for (const std::string profile : {"precise", "fast"}) {
+    SCOPED_TRACE(profile);
+    auto world = Make(profile);
+    const int steps = static_cast<int>(std::lround(0.6 / world->model().physics.step));
+    const double tilt_limit = profile == "precise" ? 0.1 : 0.12;
+    const RobotId mover{Team::kYellow, 1}, resting{Team::kBlue, 6};
+    const Vec3 at(2.0, -2.0, 0.0);
+    auto state = [&](const RobotId& id) {
+      for (const RobotState& r : world->GroundTruth().robots) {
+        if (r.id == id) return r;
       }
-      // Resting, a chassis' centre stands 50 mm up; a robot on another's top would be 150 mm up.
-      EXPECT_LT(highest, 0.06) << "case " << index << ": offset " << offset << ", heading " << heading;
-      EXPECT_LT(most_tilt, 0.1) << "case " << index << ": offset " << offset << ", heading " << heading;
-      EXPECT_GT((state(mover).pose.position - state(resting).pose.position).head<2>().norm(), 0.16)
-          << "case " << index << ": still inside one another";
-      ++index;
+      return RobotState{};
+    };
+    int index = 0;
+    for (double offset : {0.0, 0.03, 0.06, 0.09, 0.12, 0.15}) {
+      for (double heading : {0.3, 2.0, 4.0}) {
+        PositionEvent rest;
+        rest.target = Target::Robot(resting);
+        rest.position = at;
+        rest.yaw = 1.0;
+        rest.velocity = rest.angular_velocity = Vec3::Zero();
+        world->events().Post(rest);
+        PositionEvent onto;
+        onto.target = Target::Robot(mover);
+        onto.position = at + offset * Vec3(std::cos(heading), std::sin(heading), 0.0);
+        onto.yaw = heading;
+        onto.velocity = -3.0 * Vec3(std::cos(heading + 0.4), std::sin(heading + 0.4), 0.0);
+        onto.angular_velocity = Vec3::Zero();
+        world->events().Post(onto);
+        double highest = 0.0, most_tilt = 0.0;
+        for (int step = 0; step < steps; ++step) {
+          world->Step();
+          for (const RobotId& id : {mover, resting}) {
+            const RobotState r = state(id);
+            highest = std::max(highest, r.pose.position.z());
+            most_tilt = std::max(most_tilt, std::acos(std::min(1.0, (r.pose.orientation * Vec3::UnitZ()).z())));
+          }
+        }
+        // Resting, a chassis' centre stands 50 mm up; a robot on another's top would be 150 mm up.
+        EXPECT_LT(highest, 0.06) << "case " << index << ": offset " << offset << ", heading " << heading;
+        EXPECT_LT(most_tilt, tilt_limit) << "case " << index << ": offset " << offset << ", heading " << heading;
+        EXPECT_GT((state(mover).pose.position - state(resting).pose.position).head<2>().norm(), 0.16)
+            << "case " << index << ": still inside one another";
+        ++index;
+      }
     }
   }
 }
@@ -206,7 +219,7 @@ TEST_F(DivA, TheSameSeedGivesTheSameRunAnotherSeedAnother) {
   std::int64_t teleported = 0;
   for (std::int64_t n : a.teleports) teleported += n;
   EXPECT_GT(teleported, 4);  // about 10 expected
-  EXPECT_EQ(a.steps, 2000);
+  EXPECT_EQ(a.steps, std::lround(2.0 / Make()->model().physics.step));
   EXPECT_EQ(a.checks, 2);
 }
 
@@ -275,9 +288,10 @@ TEST_F(DivA, AtTheFastSettingsNoWheelSinksIntoTheCarpetInRandomPlay) {
 
 // A robot knocked onto two wheels rocks back: leaning past 20° for a moment is not tipped over.
 // One that lies on its side is, once it has lain there for `tipped_for`.
+// At precise, where the knocks below were measured: this is the soak's counting, not the physics.
 TEST_F(DivA, ARobotRockingOntoTwoWheelsIsNotTippedOverOneThatFallsIs) {
   const auto run = [&](double roll_rate, double tipped_for, double* max_lean, double* final_lean) {
-    auto world = Make();
+    auto world = Make("precise");
     PositionEvent knock;
     knock.target = Target::Robot({Team::kBlue, 3});
     knock.angular_velocity = Vec3(roll_rate, 0.0, 0.0);
