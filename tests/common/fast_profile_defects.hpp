@@ -20,10 +20,4 @@ inline constexpr const char* kWheelRobotSagsAtTwoSweeps =
 inline constexpr const char* kDiffRobotSlipsAtSixSweeps =
     "fast profile: the differential robot's wheels slip at 6 solver sweeps (turns 7 % short)";
 
-/// Driving while turning drifts across the command, in proportion to the step: (1, 0.5, 2)
-/// gives 0.4725 m/s sideways at 5 ms (0.4945 at 1 ms), both drives. The speed loop works in the
-/// robot's frame, which turns ω·dt during each step.
-inline constexpr const char* kTurningDriftsWithTheStep =
-    "fast profile: driving while turning drifts 27 mm/s sideways at 5 ms steps (5.5 at 1 ms)";
-
 }  // namespace ubersim::testing

@@ -408,7 +408,6 @@ class ProbeContext final : public RobotContext {
 };
 
 TEST_P(OmniForceDrive, ReportsTheWheelsTurningWithTheCarpetAndTheVelocityTheyImply) {
-  if (GetParam() == "fast") GTEST_SKIP() << testing::kTurningDriftsWithTheStep;
   ForceWorld w(GetParam());
   ProbeContext ctx(w, w.model.robots.at(0).model->drive->params);
   std::shared_ptr<Drive> probe = w.registry.CreateDrive("omni_force");
@@ -442,9 +441,12 @@ TEST_P(OmniForceDrive, ReportsTheWheelsTurningWithTheCarpetAndTheVelocityTheyImp
   EXPECT_NEAR(f.local_velocity.linear.x(), v.x(), 1e-4);
   EXPECT_NEAR(f.local_velocity.linear.y(), v.y(), 1e-4);
   EXPECT_NEAR(f.local_velocity.angular.z(), spin, 1e-4);
-  // …and that is the command, within the servo's lag.
-  EXPECT_NEAR(f.local_velocity.linear.x(), 1.0, 0.01);
-  EXPECT_NEAR(f.local_velocity.linear.y(), 0.5, 0.01);
+  // …and that is the command, within the servo's lag: sideways, the rollers' drag over the
+  // wheels' stiffness, which is the force that reaches the target in one step, so in proportion
+  // to the step (3.5 mm/s at 1 ms, 17 at 5 ms). Before the drive asked for its velocity in the
+  // frame the robot turns to within the step (AheadOfTheTurn), turning added 5 and 10 more.
+  EXPECT_NEAR(f.local_velocity.linear.x(), 1.0, 0.002);
+  EXPECT_NEAR(f.local_velocity.linear.y(), 0.5, 0.005 * w.Dt() / 0.001);
   EXPECT_NEAR(f.local_velocity.angular.z(), 2.0, 0.01);
 }
 

@@ -29,11 +29,13 @@ struct Pinned {
 // these 3 s, div-a does not. And again when the omni drives' firmware got its gyro heading hold
 // (GyroRateLoop): every robot's turn rate is corrected by its integrated error. And again when a
 // flat face meeting a round back got its contact on the disc's centre line (PlaceSpots in
-// upright_prism.cpp): ssl-2003 and div-a have robots meet face to back in these 3 s.
+// upright_prism.cpp): ssl-2003 and div-a have robots meet face to back in these 3 s. And again
+// when the omni drives began to ask for their velocity in the frame the robot turns to within
+// the step (AheadOfTheTurn): every turning robot's wheel speeds change.
 constexpr Pinned kPinned[] = {
-    {"ssl-2003", 0x6d4d5cce6d81ce76ULL, 0x8d7125492f58169cULL},
-    {"div-b", 0x8d093cd08401175aULL, 0x921f7c0f0e4178d4ULL},
-    {"div-a", 0x8cc4f584a86d7be4ULL, 0x35e323d353020765ULL},
+    {"ssl-2003", 0x4fa37d8dc03259bbULL, 0x928e745c01b9b843ULL},
+    {"div-b", 0xf52f5ff7f4d04c05ULL, 0xab65ddc76db49836ULL},
+    {"div-a", 0xc72bf4e601b4b2f4ULL, 0x318605d8d5764e13ULL},
 };
 
 // The world's name in gtest's output, not the struct's bytes.

@@ -225,7 +225,9 @@ class OmniForceDrive final : public ubersim::Drive {
       const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
       // The firmware's gyro holds the heading the setpoint integrates to.
       const double spin = gyro_.Correct(set.angular, ctx_->Chassis().GetTwist().angular.z(), step.dt);
-      targets.noalias() = geometry_ * Eigen::Vector3d(set.linear.x(), set.linear.y(), spin);
+      // In the frame the robot turns to within the step: driving while turning, it keeps its course.
+      const Eigen::Vector2d lin = ubersim::AheadOfTheTurn(set.linear, spin, step.dt);
+      targets.noalias() = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
       // Keep the direction when a wheel would exceed its speed: scale all wheels together.
       const double peak = targets.cwiseAbs().maxCoeff();
       if (peak > max_wheel_speed_) targets *= max_wheel_speed_ / peak;

@@ -206,9 +206,10 @@ class OmniDrive final : public ubersim::Drive {
       }
     }
     const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
-    const Eigen::Vector2d lin = set.linear;
     // The firmware's gyro holds the heading the setpoint integrates to.
     const double spin = gyro_.Correct(set.angular, ctx_->Chassis().GetTwist().angular.z(), step.dt);
+    // In the frame the robot turns to within the step: driving while turning, it keeps its course.
+    const Eigen::Vector2d lin = ubersim::AheadOfTheTurn(set.linear, spin, step.dt);
 
     wheel_targets_.noalias() = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
     // Keep the direction when a wheel would exceed its speed: scale all wheels together.
