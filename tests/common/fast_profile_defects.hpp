@@ -10,7 +10,9 @@ namespace ubersim::testing {
 /// Wheel-body robots at two solver sweeps (the islands without the ball): the chassis sags 6.8 mm
 /// on its wheel hinges, tips 1.5° nose down and creeps 6.7 mm/s at rest (precise: 0.06 mm/s); a
 /// braking robot swings back and turns; the dribbler bar, 7 mm low, pushes a ball put at rest in
-/// the mouth out at 0.3 m/s. 4 sweeps: 2.7 mm and 1.1 mm/s; 10: 0.9 mm.
+/// the mouth out at 0.3 m/s. 4 sweeps: 2.7 mm and 1.1 mm/s; 10: 0.9 mm. The cause is the mass
+/// ratio of 0.05 kg wheels under a 2.3 kg chassis (0.2 kg wheels: 1.2 mm, 0.24°), not the load,
+/// the contacts or the motors (docs/performance.md).
 inline constexpr const char* kWheelRobotSagsAtTwoSweeps =
     "fast profile: wheel-body robots sag 6.8 mm on their hinges and creep 6.7 mm/s at two solver sweeps";
 
