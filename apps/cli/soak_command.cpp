@@ -92,10 +92,10 @@ void PrintTrace(const kernel::World& world, const TraceTarget& target) {
   kernel::StateCheckOptions overlaps;
   overlaps.finite = overlaps.speed = overlaps.carpet = overlaps.walls = overlaps.tilt = false;
   overlaps.limits.robot_penetration = overlaps.limits.ball_penetration = 0.0005;
+  const auto is_traced = [&](const kernel::StateObject& o) {
+    return o.kind == kernel::StateObject::Kind::kRobot && o.robot == target.robot;
+  };
   for (const kernel::StateViolation& v : kernel::CheckState(world, overlaps)) {
-    const auto is_traced = [&](const kernel::StateObject& o) {
-      return o.kind == kernel::StateObject::Kind::kRobot && o.robot == target.robot;
-    };
     if (!v.other || (!is_traced(v.object) && !is_traced(*v.other))) continue;
     const kernel::StateObject& them = is_traced(v.object) ? *v.other : v.object;
     std::printf(", %.1f mm inside %s", 1e3 * v.value, them.name.c_str());

@@ -62,9 +62,6 @@ Measured Average(DiffWorld& w, const MoveCommand& c, int n = 50) {
   return m;
 }
 
-// The profiles a user meets: precise (the shipped worlds') and fast (one flag away).
-auto BothProfiles() { return ::testing::Values(std::string("precise"), std::string("fast")); }
-
 class DiffDrive : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(DiffDrive, StandsLevelOnWheelsAndCastersWithoutDrifting) {
@@ -116,7 +113,7 @@ TEST_P(DiffSteadyVelocity, WithinThreePercentOfTheCommand) {
 
 INSTANTIATE_TEST_SUITE_P(
     Commands, DiffSteadyVelocity,
-    ::testing::Combine(BothProfiles(),
+    ::testing::Combine(::testing::ValuesIn(PhysicsProfileNames()),
                        ::testing::Values(VelocityCase{"forward", 1.0, 0.0, -3.0},
                                          VelocityCase{"full_speed", 2.0, 0.0, -3.5},
                                          VelocityCase{"backward", -1.0, 0.0, 0.0},
@@ -250,7 +247,7 @@ TEST_P(DiffDrive, GlobalCommandIsTurnedIntoTheRobotFrame) {
   EXPECT_GE(Count(across.text.str(), "cannot move sideways"), 1) << across.text.str();
 }
 
-INSTANTIATE_TEST_SUITE_P(BothProfiles, DiffDrive, BothProfiles(),
+INSTANTIATE_TEST_SUITE_P(BothProfiles, DiffDrive, ::testing::ValuesIn(PhysicsProfileNames()),
                          [](const auto& info) { return info.param; });
 
 // The motor's rotor turns with the wheel through its gears: `motor.rotor_inertia` adds to each

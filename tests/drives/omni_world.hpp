@@ -19,8 +19,8 @@ namespace ubersim::kernel {
 
 inline constexpr const char* kOmniRobot = UBERSIM_SOURCE_DIR "/models/robots/ssl-omni-2026.yaml";
 
-// The profiles a user meets: precise (the shipped worlds') and fast (one flag away).
-inline auto BothProfiles() { return ::testing::Values(std::string("precise"), std::string("fast")); }
+// Every physics profile a user may choose (precise, the shipped worlds', and fast).
+inline auto BothProfiles() { return ::testing::ValuesIn(PhysicsProfileNames()); }
 inline std::string ProfileName(const ::testing::TestParamInfo<std::string>& info) { return info.param; }
 
 struct OmniWorld {
