@@ -92,8 +92,8 @@ constexpr double kDeg = M_PI / 180.0;
 // before its contact exists (plus the 0.5 mm contact layer); at fast the speculative contacts
 // meet the shells at their surfaces.
 double CrashDepthLimit(const std::string& profile) { return profile == "precise" ? 0.0065 : 0.002; }
-// How far a wheel-body robot at rest leans at fast: its wheels' hinges sag 1.5-2° at two solver
-// iterations (0.2° at precise); a robot standing after a crash is back to that.
+// How far a robot may still lean once a crash is over: back on its wheels (a wheel-body robot's
+// hinges sagged 1.5-2° at rest at two solver iterations; contact wheels stand level).
 constexpr double kRestingTilt = 3 * kDeg;
 
 class RobotCrash : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};

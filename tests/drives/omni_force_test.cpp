@@ -19,7 +19,6 @@
 #include <gtest/gtest.h>
 #include <ubersim/servo.hpp>
 
-#include "../common/fast_profile_defects.hpp"
 #include "omni_world.hpp"
 #include "world/world_attorney.hpp"
 
@@ -473,7 +472,6 @@ struct Ideal {
 };
 
 TEST_P(OmniForceDrive, DrivesTheWheelBodyDrivesPath) {
-  if (GetParam() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   // Forward, an arc, a global-frame diagonal, stop: 3.5 s within the wheels' grip. Both drives
   // end within a centimetre of the ideal robot and of each other.
   const std::vector<std::pair<MoveCommand, double>> plan = {
@@ -489,10 +487,14 @@ TEST_P(OmniForceDrive, DrivesTheWheelBodyDrivesPath) {
     omni.Drive(command, seconds);
   }
   const RobotState f = force.Robot(), o = omni.Robot();
-  EXPECT_LT(std::hypot(f.pose.position.x() - ideal.x, f.pose.position.y() - ideal.y), 0.01);
-  EXPECT_LT(std::hypot(f.pose.position.x() - o.pose.position.x(), f.pose.position.y() - o.pose.position.y()), 0.01);
+  // At fast both end further from the ideal robot (whose servo integrates the same 5 ms steps
+  // exactly): the one-body robot 10.5 mm, the contact-wheel robot 15.2 mm, over a 3.5 m path.
+  const double off = GetParam() == "fast" ? 0.02 : 0.01;
+  EXPECT_LT(std::hypot(o.pose.position.x() - ideal.x, o.pose.position.y() - ideal.y), off);
+  EXPECT_LT(std::hypot(f.pose.position.x() - ideal.x, f.pose.position.y() - ideal.y), off);
+  EXPECT_LT(std::hypot(f.pose.position.x() - o.pose.position.x(), f.pose.position.y() - o.pose.position.y()), off);
   EXPECT_NEAR(f.pose.Yaw(), ideal.yaw, 0.015);
-  EXPECT_NEAR(f.pose.Yaw(), o.pose.Yaw(), 0.04);  // the wheel-body robot turns 0.026 rad too far
+  EXPECT_NEAR(f.pose.Yaw(), o.pose.Yaw(), 0.04);
 }
 
 INSTANTIATE_TEST_SUITE_P(BothProfiles, OmniForceDrive, BothProfiles(), ProfileName);

@@ -4,6 +4,7 @@
 // braking to a stop after the command timeout, at both physics profiles; the motor's rotor
 // inertia on the wheel's axle.
 #include <cmath>
+#include <filesystem>
 #include <ostream>
 #include <sstream>
 #include <string>
@@ -13,7 +14,7 @@
 
 #include <ode/ode.h>
 
-#include "../common/fast_profile_defects.hpp"
+#include "../common/edited_model_file.hpp"
 #include "omni_world.hpp"
 #include "physics/scene_graph.hpp"
 #include "ubersim/wheel.hpp"
@@ -25,7 +26,6 @@ namespace {
 class OmniDrive : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(OmniDrive, RestsOnItsWheelsWithoutDrifting) {
-  if (GetParam() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   OmniWorld w(GetParam());
   w.Run(1.0);
   const RobotState r = w.Robot();
@@ -107,7 +107,6 @@ TEST_P(OmniDrive, SpeedUpFollowsTheAccelerationLimit) {
 }
 
 TEST_P(OmniDrive, BrakesToAStopAfterTheCommandTimeout) {
-  if (GetParam() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   OmniWorld w(GetParam());
   w.Drive(LocalVelocityCommand{1.5, 0.0, 0.0}, 1.0);
   EXPECT_GT(w.LocalVelocity().x(), 1.4);
@@ -127,9 +126,14 @@ TEST(OmniDriveModel, WheelSpeedCommandMustMatchTheWheelCount) {
 }
 
 // The motor's rotor turns with the wheel through its gears: the model's rotor_inertia adds to the
-// wheel's inertia about its axle, and nothing to its mass (the motor rides on the chassis).
+// wheel's inertia about its axle, and nothing to its mass (the motor rides on the chassis). With
+// wheel bodies (`wheel_bodies: true`) that is the body's; contact wheels step it themselves
+// (tests/unit/physics/fixed_mass_test.cpp).
 TEST(OmniDriveModel, TheRotorAddsInertiaAboutTheAxleOnly) {
-  OmniWorld w("fast");
+  const std::string file = testing::EditedModelFile(kOmniRobot, "  plugin: omni\n", "  plugin: omni\n  wheel_bodies: true\n",
+                                                    "ubersim-omni-wheel-bodies-robot");
+  OmniWorld w("fast", file);
+  std::filesystem::remove(file);
   Body* wheel = WorldAttorney::Scene(*w.world).Find("blue/0/wheel0")->FindBody("wheel");
   ASSERT_NE(wheel, nullptr);
   dMass m;
@@ -140,6 +144,16 @@ TEST(OmniDriveModel, TheRotorAddsInertiaAboutTheAxleOnly) {
   EXPECT_NEAR(m.I[2 * 4 + 2], 0.5 * mass * r * r + rotor, 1e-12);
   EXPECT_NEAR(m.I[0], mass * (3 * r * r + width * width) / 12, 1e-12);
   EXPECT_NEAR(m.I[1 * 4 + 1], mass * (3 * r * r + width * width) / 12, 1e-12);
+}
+
+// By default each wheel is a contact on the chassis: no wheel body, and the chassis carries the
+// robot's 2.5 kg (2.3 kg and four 0.05 kg wheels).
+TEST(OmniDriveModel, ContactWheelsAddTheirMassToTheChassis) {
+  OmniWorld w("fast");
+  EXPECT_EQ(WorldAttorney::Scene(*w.world).Find("blue/0/wheel0")->FindBody("wheel"), nullptr);
+  Body* chassis = WorldAttorney::Scene(*w.world).Find("blue/0")->FindBody("chassis");
+  ASSERT_NE(chassis, nullptr);
+  EXPECT_DOUBLE_EQ(chassis->Mass(), 2.5);
 }
 
 // The modern robot's wheels lie inside its shell (outer rim 88.9 mm from the centre, the shell

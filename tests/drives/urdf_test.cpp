@@ -9,7 +9,6 @@
 
 #include <gtest/gtest.h>
 
-#include "../common/fast_profile_defects.hpp"
 #include "omni_world.hpp"
 #include "model/urdf.hpp"
 #include "world/world_attorney.hpp"
@@ -78,7 +77,6 @@ INSTANTIATE_TEST_SUITE_P(Commands, Twins,
 class UrdfBall : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(UrdfBall, TheMeshShellCollidesWithTheBall) {
-  if (GetParam() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   OmniWorld w(GetParam(), kUrdfRobot);
   // Roll the ball at the robot's flat front (robot at x = -2 facing +x).
   w.world->events().Post(PositionEvent{Target::Ball(), Vec3(-1.5, 0.0, 0.0), std::nullopt,

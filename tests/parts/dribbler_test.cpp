@@ -9,7 +9,6 @@
 
 #include <gtest/gtest.h>
 
-#include "../common/fast_profile_defects.hpp"
 #include "../common/edited_model_file.hpp"
 #include "parts_world.hpp"
 #include "world/world_attorney.hpp"
@@ -101,7 +100,6 @@ TEST_P(RollerDribbler, ARobotTakenOffTheFieldReportsNoContact) {
 }
 
 TEST_P(RollerDribbler, SpinsTheBallBackAgainstTheRobot) {
-  if (Profile() == "fast" && std::get<0>(GetParam()) == BarModel::kSurface) GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   PartsWorld w(Profile(), RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
@@ -114,7 +112,6 @@ TEST_P(RollerDribbler, SpinsTheBallBackAgainstTheRobot) {
 }
 
 TEST_P(RollerDribbler, DribblingLeavesTheRobotStandingStill) {
-  if (Profile() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   PartsWorld w(Profile(), RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
@@ -128,7 +125,6 @@ TEST_P(RollerDribbler, DribblingLeavesTheRobotStandingStill) {
 }
 
 TEST_P(RollerDribbler, HoldsTheBallThroughADriveAndATurn) {
-  if (Profile() == "fast" && std::get<0>(GetParam()) == BarModel::kSurface) GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   PartsWorld w(Profile(), RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
@@ -176,7 +172,6 @@ TEST_P(RollerDribbler, LosesTheBallOnAFastSpin) {
 }
 
 TEST_P(RollerDribbler, HoldsWhileSpinningSlowly) {
-  if (Profile() == "fast" && std::get<0>(GetParam()) == BarModel::kSurface) GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   PartsWorld w(Profile(), RobotFile());
   w.Run(0.2);
   w.PlaceBallInMouth();
@@ -198,7 +193,6 @@ TEST_P(RollerDribblerAtProfile, HingeBarSpeedIsClampedToTheMaximum) {
 }
 
 TEST_P(RollerDribblerAtProfile, SurfaceBarSpeedIsClampedToo) {
-  if (GetParam() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   // The surface bar has no axle: a held ball spins as fast with 10⁴ rad/s commanded as with the
   // maximum, and slower at half of it.
   auto spin = [](double command) {
@@ -217,7 +211,6 @@ TEST_P(RollerDribblerAtProfile, SurfaceBarSpeedIsClampedToo) {
 }
 
 TEST_P(RollerDribblerAtProfile, The2003RobotAndTheUrdfTwinHoldTheBallToo) {
-  if (GetParam() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   for (const char* file : {k2003Robot, kModernUrdfRobot}) {
     PartsWorld w(GetParam(), file);
     w.Run(0.2);

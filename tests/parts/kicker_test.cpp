@@ -9,7 +9,6 @@
 
 #include <gtest/gtest.h>
 
-#include "../common/fast_profile_defects.hpp"
 #include "parts_world.hpp"
 
 namespace ubersim::kernel {
@@ -110,7 +109,6 @@ TEST_P(SolenoidKicker, NoKickWhenTheBallIsNotInFrontOfTheFace) {
 }
 
 TEST_P(SolenoidKicker, RechargeBlocksASecondKickAndReadyReportsIt) {
-  if (Profile() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   PartsWorld w(Profile());
   w.Run(0.2);
   EXPECT_TRUE(w.Robot().kicker_ready);
@@ -188,7 +186,6 @@ TEST_P(SolenoidKicker, RecoilPushesTheRobotBack) {
 }
 
 TEST_P(SolenoidKicker, KickWhileDribblingLeavesAtTheClampedSpeed) {
-  if (Profile() == "fast") GTEST_SKIP() << testing::kWheelRobotSagsAtTwoSweeps;
   PartsWorld w(Profile());
   w.Run(0.2);
   w.PlaceBallInMouth();
@@ -204,7 +201,9 @@ TEST_P(SolenoidKicker, KickWhileDribblingLeavesAtTheClampedSpeed) {
   c.Run(0.5, std::nullopt, std::nullopt, 150.0);
   const Vec3 u = LaunchVelocity(c, KickCommand{3.0, 1.0}, 150.0);
   EXPECT_NEAR(std::atan2(u.z(), std::hypot(u.x(), u.y())) / kDeg, 45.0, 1.0);
-  EXPECT_NEAR(u.norm(), 3.0, 0.1);
+  // At fast the chipped ball spends the kick's whole 5 ms step against the bar turning back at
+  // 0.8 m/s: 2.887 m/s measured (3.8 % slow), 3.0 at precise.
+  EXPECT_NEAR(u.norm(), 3.0, Profile() == "fast" ? 0.15 : 0.1);
 }
 
 TEST_P(SolenoidKicker, KickAddsTheRobotsVelocity) {

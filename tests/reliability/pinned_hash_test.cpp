@@ -31,11 +31,13 @@ struct Pinned {
 // flat face meeting a round back got its contact on the disc's centre line (PlaceSpots in
 // upright_prism.cpp): ssl-2003 and div-a have robots meet face to back in these 3 s. And again
 // when the omni drives began to ask for their velocity in the frame the robot turns to within
-// the step (AheadOfTheTurn): every turning robot's wheel speeds change.
+// the step (AheadOfTheTurn): every turning robot's wheel speeds change. And again when the drives'
+// wheels became motorised contacts on the chassis (ContactWheel: one body a robot, no wheel
+// bodies) and a ball slower than half its radius a step began to be swept against robots.
 constexpr Pinned kPinned[] = {
-    {"ssl-2003", 0x4fa37d8dc03259bbULL, 0x928e745c01b9b843ULL},
-    {"div-b", 0xf52f5ff7f4d04c05ULL, 0xab65ddc76db49836ULL},
-    {"div-a", 0xc72bf4e601b4b2f4ULL, 0x318605d8d5764e13ULL},
+    {"ssl-2003", 0xf446fa7451ebaa54ULL, 0x15a7243c0631fe01ULL},
+    {"div-b", 0x0910f0eb204a25e8ULL, 0x5dc4213e23899612ULL},
+    {"div-a", 0xfcb5cb159a130519ULL, 0x24a7a76e0ff89a2eULL},
 };
 
 // The world's name in gtest's output, not the struct's bytes.

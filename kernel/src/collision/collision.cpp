@@ -524,8 +524,12 @@ void CollisionManager::SweepFastBalls() {
     const double speed = v.norm();
     const double radius = ball->GetShape().radius;
     const double reach = speed * swept_ball_step_;
-    // Slower than half a radius per step, the ordinary contacts catch everything.
-    if (reach <= 0.5 * radius) continue;
+    // Slower than half a radius per step the ordinary contacts keep the ball out of the field's
+    // static walls and goals (a step's travel in, then pushed out). A robot is swept for down to
+    // a tenth of a radius a step: at 5 ms a ball rolling at 1 m/s into a robot's side went 4.2 mm
+    // into the shell before its contact existed.
+    if (reach <= 0.1 * radius) continue;
+    const bool slow = reach <= 0.5 * radius;
     const Vec3 from = ball->GetPose().position;
     const Vec3 dir = v / speed;
     if (!ray_) ray_.reset(dCreateRay(nullptr, 1.0));
@@ -540,7 +544,7 @@ void CollisionManager::SweepFastBalls() {
     const Vec3 lo = from.cwiseMin(to) - Vec3::Constant(radius), hi = from.cwiseMax(to) + Vec3::Constant(radius);
     for (GeomImpl* target : sweep_targets_) {
       GeomImpl& other = *target;
-      if (&other == ball || !MayCollide(*ball, other)) continue;
+      if (&other == ball || (slow && !other.body()) || !MayCollide(*ball, other)) continue;
       dReal box[6];
       dGeomGetAABB(other.id(), box);
       if (box[1] < lo.x() || box[0] > hi.x() || box[3] < lo.y() || box[2] > hi.y() || box[5] < lo.z() ||

@@ -60,6 +60,32 @@ BodyImpl::BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumula
   dBodySetData(body_.get(), this);
 }
 
+void BodyImpl::AddFixedMass(const MassSpec& part, const Pose& at) {
+  if (!(part.mass > 0.0) || !std::isfinite(part.mass) || !part.inertia_diagonal.allFinite() ||
+      !part.inertia_off_diagonal.allFinite() || !at.position.allFinite()) {
+    throw PluginError("body '" + name_ + "': a fixed part's mass must be positive and finite");
+  }
+  const Eigen::Matrix3d own = (Eigen::Matrix3d() << part.inertia_diagonal.x(), part.inertia_off_diagonal.x(),
+                               part.inertia_off_diagonal.y(), part.inertia_off_diagonal.x(), part.inertia_diagonal.y(),
+                               part.inertia_off_diagonal.z(), part.inertia_off_diagonal.y(),
+                               part.inertia_off_diagonal.z(), part.inertia_diagonal.z())
+                                  .finished();
+  const Eigen::Matrix3d r = at.orientation.normalized().toRotationMatrix();
+  const Vec3& p = at.position;
+  // The part's inertia turned into the body frame, then moved to the body origin (parallel axes).
+  const Eigen::Matrix3d added =
+      r * own * r.transpose() + part.mass * (p.squaredNorm() * Eigen::Matrix3d::Identity() - p * p.transpose());
+  dMass m;
+  dBodyGetMass(body_.get(), &m);
+  const auto at_origin = [&m, &added](int row, int col) { return m.I[row * 4 + col] + added(row, col); };
+  const double total = m.mass + part.mass;
+  dMassSetParameters(&m, total, 0, 0, 0, at_origin(0, 0), at_origin(1, 1), at_origin(2, 2), at_origin(0, 1),
+                     at_origin(0, 2), at_origin(1, 2));
+  if (!dMassCheck(&m)) throw PluginError("body '" + name_ + "': adding a fixed part left no valid inertia tensor");
+  dBodySetMass(body_.get(), &m);
+  mass_ = total;
+}
+
 Pose BodyImpl::GetPose() const {
   return Pose{ToVec3(dBodyGetPosition(body_.get())), ToQuat(dBodyGetQuaternion(body_.get()))};
 }

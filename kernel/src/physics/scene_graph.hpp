@@ -37,6 +37,7 @@ class BodyImpl final : public Body {
   void AddTorque(const Vec3& torque) override;
   void ApplyImpulse(const Vec3& impulse) override;
   double Mass() const override { return mass_; }
+  void AddFixedMass(const MassSpec& part, const Pose& at) override;
   void Wake() override { dBodyEnable(body_.get()); }
 
   /// The ODE body.

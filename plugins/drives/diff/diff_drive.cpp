@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // diff: a differential drive, the ÜberSim paper's "DiffRobot".
 //
-// Two driven wheels, bodies on motorised hinges whose axles lie along the robot's lateral (y)
-// axis, grip the carpet with isotropic friction; one or two ball casters, low-friction spheres
+// Two driven wheels, motorised contacts on the chassis (or, with `wheel_bodies: true`, bodies on
+// motorised hinges) whose axles lie along the robot's lateral (y) axis, grip the carpet with
+// isotropic friction; one or two ball casters, low-friction spheres
 // fixed to the chassis, keep it level. The casters are spring-loaded (a soft contact): with four
 // rigid supports ODE may hand nearly all the weight to the casters, and the wheels, unloaded,
 // spin in place; springs leave the weight on the wheels and only resist pitching. A local servo loop turns the move command into a
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -28,8 +30,8 @@ using ubersim::Vec3;
 constexpr double kGlobalLateralTolerance = 0.01;
 // At most one "lateral part dropped" warning per this much simulated time, s.
 constexpr double kWarningInterval = 1.0;
-// Layout of SaveState's bytes: bump when they change.
-constexpr std::uint32_t kStateLayout = 1;
+// Layout of SaveState's bytes: bump when they change. 2: the wheels' rates.
+constexpr std::uint32_t kStateLayout = 2;
 
 // Warns about dropped lateral commands: the first at once, then at most one per interval, each
 // saying how many were dropped since the previous warning.
@@ -105,6 +107,9 @@ class DiffDrive final : public ubersim::Drive {
 
     // The robot stands on the carpet at z = 0; the chassis origin (its centre of mass) is this high.
     const double chassis_z = ctx.Chassis().GetPose().position.z();
+    const bool wheel_bodies = p.GetBool("wheel_bodies", false);
+    // The casters are springs that leave the weight on the two wheels.
+    const double load = 0.5 * (ctx.Chassis().Mass() + 2 * mass) * ctx.Gravity().norm();
     const char* names[2] = {"wheel_left", "wheel_right"};
     for (int i = 0; i < 2; ++i) {
       const double side = i == 0 ? 1.0 : -1.0;  // left wheel at +y
@@ -118,8 +123,7 @@ class DiffDrive final : public ubersim::Drive {
       w.tyre = tyre_surface;
       w.holding_torque = max_torque_;
       w.rotor_inertia = rotor_inertia_;
-      wheels_[i] = &ubersim::AddDrivenWheel(ctx, w);
-      wheel_bodies_[i] = ctx.Node().FindChild(w.node_name)->FindBody("wheel");
+      wheels_[i].emplace(ctx, w, wheel_bodies, load);
     }
     AddCasters(ctx, p, caster_surface, chassis_z);
   }
@@ -164,7 +168,7 @@ class DiffDrive final : public ubersim::Drive {
     v.linear.y() = 0.0;
     servo_.Set(v);
     const std::array<double, 2> rates = WheelRates(v);
-    for (int i = 0; i < 2; ++i) ubersim::RollWheel(*wheel_bodies_[i], ctx_->Chassis(), Vec3::UnitY(), rates[i]);
+    for (int i = 0; i < 2; ++i) wheels_[i]->Roll(rates[i]);
   }
 
   // The servo loop's memory, the step length the casters' contacts use, and the warning's pace.
@@ -172,6 +176,7 @@ class DiffDrive final : public ubersim::Drive {
     ubersim::StateWriter w(kStateLayout);
     w.Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_).Double(dt_);
     lateral_warning_.Save(w);
+    for (const auto& wheel : wheels_) w.Double(wheel->Rate());
     return w.Take();
   }
 
@@ -182,11 +187,22 @@ class DiffDrive final : public ubersim::Drive {
     command_ = r.Move();
     dt_ = r.Double();
     lateral_warning_.Restore(r);
+    for (auto& wheel : wheels_) {
+      const double rate = r.Double();
+      if (!wheel->WheelBody()) wheel->Roll(rate);  // a wheel body's spin is the kernel's to restore
+    }
     r.Finish();
   }
 
   void PreStep(const ubersim::StepInfo& step) override {
     dt_ = step.dt;  // the casters' contacts of this step use it
+    SetWheelMotors(step);
+    for (auto& wheel : wheels_) wheel->Step(step.dt);
+  }
+
+ private:
+  // This step's wheel motors: the direct wheel speeds of a fresh command, else the servo loop's.
+  void SetWheelMotors(const ubersim::StepInfo& step) {
     const bool fresh = watchdog_.Fresh(ctx_->SimTime());
     if (fresh) {
       if (const auto* w = std::get_if<ubersim::WheelSpeedCommand>(&command_)) {
@@ -212,7 +228,6 @@ class DiffDrive final : public ubersim::Drive {
     wheels_[1]->SetMotor(right, max_torque_);
   }
 
- private:
   void AddCasters(ubersim::RobotContext& ctx, const ubersim::ParamView& p,
                   const ubersim::SurfaceMaterial& surface, double chassis_z) {
     struct Caster { double x, radius; };
@@ -265,8 +280,7 @@ class DiffDrive final : public ubersim::Drive {
   }
 
   ubersim::RobotContext* ctx_ = nullptr;
-  ubersim::Joint* wheels_[2] = {nullptr, nullptr};  // left (+y), right
-  ubersim::Body* wheel_bodies_[2] = {nullptr, nullptr};  // their bodies
+  std::optional<ubersim::DrivenWheel> wheels_[2];  // left (+y), right
   double wheel_radius_ = 0.03;
   double separation_ = 0.14;       // between the wheels' contact points, m
   double max_torque_ = 0.3;        // N·m

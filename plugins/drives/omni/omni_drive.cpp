@@ -1,16 +1,21 @@
 // SPDX-License-Identifier: Apache-2.0
 // omni and mecanum: omni-directional drives with any number of roller wheels at any angles.
 //
-// Each wheel is a body on a motorised hinge. Its contact with the carpet grips across its rollers
-// and slides freely along them, which ODE models as directional friction: the geometry's friction
-// axis is the axle, turned by the rollers' angle (0 for an omni wheel, whose rollers let it slide
-// along the axle; ±45° for a mecanum wheel). A local servo loop turns the move command into a
+// Each wheel is a motorised contact on the chassis (ubersim::ContactWheel), or, when the model
+// asks (`wheel_bodies: true`), a body on a motorised hinge. Its contact with the carpet grips
+// across its rollers and slides freely along them, which ODE models as directional friction: the
+// geometry's friction axis is the axle, turned by the rollers' angle (0 for an omni wheel, whose
+// rollers let it slide along the axle; ±45° for a mecanum wheel). A contact wheel's turning is
+// the contact's surface velocity: the carpet pushes the chassis directly, so two solver sweeps
+// hold a robot standing and braking where light wheel bodies between the chassis and the carpet
+// let it sag and creep (docs/plugins.md). A local servo loop turns the move command into a
 // velocity setpoint limited in speed, acceleration and braking, and the setpoint into wheel
 // speeds through the wheel geometry, as the robots' firmware does. The same source builds both
 // plugins (UBERSIM_ROLLER_DRIVE_ID): mecanum differs in its schema, which asks for each wheel's
 // axle and roller angle.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -24,8 +29,9 @@ namespace {
 
 using ubersim::Vec3;
 
-// Layout of SaveState's bytes: bump when they change. 2: the gyro loop's heading error.
-constexpr std::uint32_t kStateLayout = 2;
+// Layout of SaveState's bytes: bump when they change. 2: the gyro loop's heading error; 3: the
+// contact wheels' rates.
+constexpr std::uint32_t kStateLayout = 3;
 
 #ifndef UBERSIM_ROLLER_DRIVE_ID
 #define UBERSIM_ROLLER_DRIVE_ID "omni"
@@ -37,9 +43,7 @@ struct Wheel {
   Vec3 grip;                   // the direction the rollers grip in (the rolling direction for omni)
   double grip_share = 1.0;     // cos of the roller angle: how much of a wheel turn moves along `grip`
   bool on_circle = true;       // an omni wheel with an inward axle: its lever is the wheel distance
-  ubersim::Joint* hinge = nullptr;
-  ubersim::Body* body = nullptr;  // the wheel
-  Vec3 axle;                      // chassis frame
+  std::optional<ubersim::DrivenWheel> driven;  // a contact on the chassis, or a body (wheel_bodies)
 };
 
 class OmniDrive final : public ubersim::Drive {
@@ -60,6 +64,7 @@ class OmniDrive final : public ubersim::Drive {
     if (p.Has("limits")) servo_.SetLimits(ubersim::ReadServoLimits(p["limits"], servo_.Limits()));
     watchdog_.SetTimeout(p.GetDouble("command_timeout", watchdog_.Timeout()));
     gyro_ = ubersim::GyroRateLoop(p.GetDouble("heading_hold", 10.0));
+    const bool wheel_bodies = p.GetBool("wheel_bodies", false);
     ubersim::SurfaceMaterial surface;
     surface.name = std::string(UBERSIM_ROLLER_DRIVE_ID) + "_wheel";
     surface.mu = 0.05;   // along the friction axis = the axle
@@ -79,6 +84,9 @@ class OmniDrive final : public ubersim::Drive {
     // The robot stands on the carpet at z = 0; the chassis origin (its centre of mass) is this high.
     const double chassis_z = ctx.Chassis().GetPose().position.z();
     const ubersim::ParamView list = p["wheels"];
+    // What each wheel carries standing: the robot's weight, its wheels included, over its wheels.
+    const double load = (ctx.Chassis().Mass() + mass * static_cast<double>(list.Size())) * ctx.Gravity().norm() /
+                        static_cast<double>(list.Size());
     for (std::size_t i = 0; i < list.Size(); ++i) {
       Wheel w;
       const ubersim::ParamView entry = list.At(i);
@@ -109,10 +117,8 @@ class OmniDrive final : public ubersim::Drive {
       spec.holding_torque = max_torque_;
       spec.rotor_inertia = rotor_inertia_;
       spec.tyre_shielded = ubersim::ShellShieldsWheel(body, ctx.BallRadius(), spec);
-      w.hinge = &ubersim::AddDrivenWheel(ctx, spec);
-      w.body = ctx.Node().FindChild(spec.node_name)->FindBody("wheel");
-      w.axle = axle;
-      wheels_.push_back(w);
+      w.driven.emplace(ctx, spec, wheel_bodies, load);
+      wheels_.push_back(std::move(w));
     }
     // A wheel turning at ω moves its contact by r·ω along its rolling direction; the rollers pass
     // on only the part along `grip`: ω = v_contact·grip / (r·cos roller), v_contact = v + ω_z × p.
@@ -143,7 +149,7 @@ class OmniDrive final : public ubersim::Drive {
   ubersim::DriveFeedback Feedback() const override {
     ubersim::DriveFeedback f;
     f.wheel_speeds.reserve(wheels_.size());
-    for (const Wheel& w : wheels_) f.wheel_speeds.push_back(w.hinge->Rate());
+    for (const Wheel& w : wheels_) f.wheel_speeds.push_back(w.driven->Rate());
     const Eigen::Vector3d v = inverse_ * Eigen::Map<const Eigen::VectorXd>(  // forward, left, angular
                                              f.wheel_speeds.data(), static_cast<Eigen::Index>(f.wheel_speeds.size()));  // forward, left, angular
     f.local_velocity.linear = Vec3(v.x(), v.y(), 0.0);
@@ -165,19 +171,17 @@ class OmniDrive final : public ubersim::Drive {
     gyro_.Reset();
     wheel_targets_.noalias() = geometry_ * Eigen::Vector3d(v.linear.x(), v.linear.y(), v.angular);
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
-      ubersim::RollWheel(*wheels_[i].body, ctx_->Chassis(), wheels_[i].axle,
-                         wheel_targets_(static_cast<Eigen::Index>(i)));
+      wheels_[i].driven->Roll(wheel_targets_(static_cast<Eigen::Index>(i)));
     }
   }
 
-  // The servo loop's memory; the wheels' motor settings and bodies are the kernel's to save.
+  // The servo loop's memory and the wheels' rates (a wheel body's is the kernel's to save too:
+  // restoring it rolls the body as it already rolls).
   std::string SaveState() const override {
-    return ubersim::StateWriter(kStateLayout)
-        .Watchdog(watchdog_)
-        .Setpoint(servo_.Setpoint())
-        .Move(command_)
-        .Double(gyro_.HeadingError())
-        .Take();
+    ubersim::StateWriter w(kStateLayout);
+    w.Watchdog(watchdog_).Setpoint(servo_.Setpoint()).Move(command_).Double(gyro_.HeadingError());
+    for (const Wheel& wheel : wheels_) w.Double(wheel.driven->Rate());
+    return w.Take();
   }
 
   void RestoreState(std::string_view state) override {
@@ -186,17 +190,27 @@ class OmniDrive final : public ubersim::Drive {
     servo_.Set(r.Setpoint());
     command_ = r.Move();
     gyro_.SetHeadingError(r.Double());
+    for (Wheel& wheel : wheels_) {
+      const double rate = r.Double();
+      if (!wheel.driven->WheelBody()) wheel.driven->Roll(rate);
+    }
     r.Finish();
   }
 
   void PreStep(const ubersim::StepInfo& step) override {
+    SetWheelMotors(step);
+    for (Wheel& w : wheels_) w.driven->Step(step.dt);
+  }
+
+ private:
+  // This step's wheel motors: the direct wheel speeds of a fresh command, else the servo loop's.
+  void SetWheelMotors(const ubersim::StepInfo& step) {
     const bool fresh = watchdog_.Fresh(ctx_->SimTime());
     if (fresh) {
       if (const auto* w = std::get_if<ubersim::WheelSpeedCommand>(&command_)) {
         // Direct wheel speeds bypass the velocity loop, as on the real robots.
         for (std::size_t i = 0; i < wheels_.size(); ++i) {
-          wheels_[i].hinge->SetMotor(std::clamp(w->wheel_speeds[i], -max_wheel_speed_, max_wheel_speed_),
-                                     max_torque_);
+          wheels_[i].driven->SetMotor(std::clamp(w->wheel_speeds[i], -max_wheel_speed_, max_wheel_speed_), max_torque_);
         }
         const Eigen::Vector3d v = inverse_ * Eigen::Map<const Eigen::VectorXd>(
                                                  w->wheel_speeds.data(), static_cast<Eigen::Index>(w->wheel_speeds.size()));
@@ -216,11 +230,10 @@ class OmniDrive final : public ubersim::Drive {
     const double peak = wheel_targets_.cwiseAbs().maxCoeff();
     const double scale = peak > max_wheel_speed_ ? max_wheel_speed_ / peak : 1.0;
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
-      wheels_[i].hinge->SetMotor(scale * wheel_targets_(static_cast<Eigen::Index>(i)), max_torque_);
+      wheels_[i].driven->SetMotor(scale * wheel_targets_(static_cast<Eigen::Index>(i)), max_torque_);
     }
   }
 
- private:
   // The command as (forward, left, angular) in the robot frame, within the speed limits.
   ubersim::PlanarVelocity TargetLocal() const {
     return servo_.ClampToLimits(ubersim::CommandedVelocity(command_, ctx_->Chassis()));

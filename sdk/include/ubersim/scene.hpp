@@ -152,6 +152,11 @@ class UBERSIM_SDK_API Body {
   virtual void ApplyImpulse(const Vec3& impulse) = 0;
   /// Total mass, kg.
   virtual double Mass() const = 0;
+  /// Adds a part fixed to the body — `part` about its own centre, its frame at `at` in the body
+  /// frame — to the body's mass and inertia (parallel axes about the body origin). The origin
+  /// stays the centre of mass: the part's first moment is left out, so add parts that balance
+  /// about it (a robot's wheels) or that are light against the body.
+  virtual void AddFixedMass(const MassSpec& part, const Pose& at) = 0;
   /// Wakes the body if ODE put it to sleep.
   virtual void Wake() = 0;
 };

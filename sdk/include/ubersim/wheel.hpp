@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -108,6 +110,162 @@ inline Joint& AddDrivenWheel(RobotContext& ctx, const WheelSpec& spec) {
   return joint;
 }
 
+/// A driven wheel without a body of its own (AddContactWheel): its carpet contact sits on the
+/// chassis, and the wheel's turning is a surface velocity of that contact, so the carpet pushes
+/// the chassis directly and a robot's step solves four contacts on one body instead of four light
+/// bodies on hinges between the chassis and the carpet. Its spin (wheel and rotor inertia about
+/// the axle) is stepped here: the motor reaches its rate within its torque and pushes the chassis
+/// back by what it spends on the rotor.
+class ContactWheel {
+ public:
+  /// How far a tyre gives under its static load, m: a rigid support of four would leave the load
+  /// to the solver (a robot rocked onto two diagonal wheels and slipped on the other two); a
+  /// tyre's spring spreads it as on a real robot, and turns and braking shift it.
+  static constexpr double kTyreSink = 0.00005;
+
+  /// Use AddContactWheel.
+  ContactWheel(Body& chassis, const WheelSpec& spec, double static_load)
+      : chassis_(&chassis),
+        axle_(spec.axle.normalized()),
+        rolling_(spec.axle.normalized().cross(Vec3::UnitZ())),
+        contact_point_(spec.centre - Vec3::UnitZ() * spec.radius),
+        grip_share_(std::abs(std::cos(spec.roller_turn))),
+        free_share_(std::abs(std::sin(spec.roller_turn))),
+        radius_(spec.radius),
+        spin_inertia_(0.5 * spec.mass * spec.radius * spec.radius + spec.rotor_inertia),
+        static_load_(static_load),
+        // A tyre giving kTyreSink under its static load, critically damped for its share of the robot.
+        stiffness_(static_load / kTyreSink),
+        damping_(2.0 * std::sqrt(stiffness_ * static_load / 9.81)),
+        max_torque_(spec.holding_torque) {}
+  ContactWheel(const ContactWheel&) = delete;
+  ContactWheel& operator=(const ContactWheel&) = delete;
+
+  /// Drives the wheel toward `rate` (rad/s about its axle, relative to the chassis) with at most
+  /// `max_torque` (N·m), as Joint::SetMotor does a hinge.
+  void SetMotor(double rate, double max_torque) {
+    target_ = rate;
+    max_torque_ = max_torque;
+  }
+  /// The wheel's rate about its axle relative to the chassis, rad/s.
+  double Rate() const { return rate_; }
+  /// Sets the rate at once: a robot put down moving (Drive::Placed).
+  void Roll(double rate) {
+    rate_ = rate;
+    target_ = rate;
+    Aim();
+  }
+  /// The motor's step of `dt` s toward its rate; call once a step in PreStep, after SetMotor.
+  /// Within its torque the motor holds the rate it is asked for, the carpet's pull on the rim
+  /// included. Saturated, the wheel spins up by what is left of the motor's torque after the
+  /// carpet's pull on a slipping rim (kinetic friction at the static load, along the rolling
+  /// direction). The chassis takes the reaction of the wheel's change of spin.
+  void Step(double dt) {
+    dt_ = dt;
+    const double wanted = spin_inertia_ * (target_ - rate_) / dt;
+    double torque = std::clamp(wanted, -max_torque_, max_torque_);
+    if (torque != wanted && touched_) {
+      const Pose pose = chassis_->GetPose();
+      const double ground = chassis_->PointVelocity(pose.position + pose.orientation * contact_point_)
+                                .dot(pose.orientation * rolling_);
+      const double slip = rate_ * radius_ - ground;  // the rim over the carpet
+      const double pull = static_load_ * radius_ * (grip_mu_ * grip_share_ + free_mu_ * free_share_);
+      if (std::abs(slip) > 1e-3) torque -= std::copysign(pull, slip);
+      // The pull slows a slipping rim toward the carpet's speed, never past it.
+      const double most = spin_inertia_ * (target_ - rate_) / dt;
+      if ((most > 0 && torque > most) || (most < 0 && torque < most)) torque = most;
+    }
+    touched_ = false;
+    rate_ += torque * dt / spin_inertia_;
+    if (torque != 0.0) chassis_->AddTorque(chassis_->GetPose().orientation * axle_ * -torque);
+    Aim();
+  }
+  /// The contact observer's part: the tyre's surface moves at the rim's speed (the contact takes
+  /// the part along the rollers' free direction as their drag, the rest as the grip), and
+  /// grips no harder than the motor can hold (its torque over the radius, against the wheel's
+  /// static load). The torque the rotor takes is not counted against that hold: a wheel spinning
+  /// up against the carpet would spin up more slowly, which only its encoder would show.
+  void Touch(SurfaceMaterial& surface) {
+    surface.surface_velocity = surface_velocity_;
+    touched_ = true;
+    free_mu_ = surface.mu;
+    if (static_load_ > 0.0) {
+      // ODE's contact as the tyre's spring and damper over the step: ERP = hk/(hk+d), CFM = 1/(hk+d).
+      const double hk = dt_ * stiffness_;
+      surface.soft_erp = hk / (hk + damping_);
+      surface.soft_cfm = 1.0 / (hk + damping_);
+      const double motor_mu = max_torque_ / (radius_ * static_load_);
+      if (motor_mu < (surface.mu2 < 0 ? surface.mu : surface.mu2)) surface.mu2 = motor_mu;
+    }
+    grip_mu_ = surface.mu2 < 0 ? surface.mu : surface.mu2;
+  }
+
+ private:
+  void Aim() { surface_velocity_ = chassis_->GetPose().orientation * rolling_ * (-rate_ * radius_); }
+
+  Body* chassis_;
+  Vec3 axle_;             // chassis frame
+  Vec3 rolling_;          // chassis frame: where a positive rate rolls the wheel (axle × up)
+  Vec3 contact_point_;    // chassis frame: under the wheel's centre
+  double grip_share_;     // |cos| of the rollers' angle: how much of a slip along the rolling
+  double free_share_;     // direction the grip and the rollers' drag take (|sin|)
+  double radius_;
+  double spin_inertia_;   // kg·m² about the axle: the wheel's own and the rotor's
+  double static_load_;    // N the wheel carries standing
+  double stiffness_;      // N/m: the tyre's
+  double damping_;        // N·s/m
+  double dt_ = 0.001;     // s, the step being run
+  bool touched_ = false;  // the carpet touched the wheel in the last step
+  double grip_mu_ = 0.0;  // the last contact's friction across the rollers ...
+  double free_mu_ = 0.0;  // ... and along them
+  double target_ = 0.0;
+  double rate_ = 0.0;
+  double max_torque_;
+  Vec3 surface_velocity_ = Vec3::Zero();
+};
+
+/// Builds a wheel without a body (ContactWheel): its mass joins the chassis at its place
+/// (Body::AddFixedMass), a sphere of its radius on the chassis touches the carpet under its centre
+/// with the tyre's directional friction, and the tyre's cylinder, unless shielded, meets everything
+/// else. `static_load` (N) is what the wheel carries standing (the robot's weight over its wheels),
+/// against which a motor weaker than the tyre's grip limits the grip. Keep the result alive as
+/// long as the robot: its contact observer refers to it.
+inline std::unique_ptr<ContactWheel> AddContactWheel(RobotContext& ctx, const WheelSpec& spec, double static_load) {
+  Body& chassis = ctx.Chassis();
+  const Quat axle_in_chassis = Quat::FromTwoVectors(Vec3::UnitZ(), spec.axle.normalized());
+  chassis.AddFixedMass(MassSpec::Solid(Shape::Cylinder(spec.radius, spec.width), spec.mass),
+                       Pose{spec.centre, axle_in_chassis});
+  auto wheel = std::make_unique<ContactWheel>(chassis, spec, static_load);
+  SceneNode& node = ctx.Node().AddChild(spec.node_name);
+  GeomSpec contact;
+  contact.name = "carpet_contact";
+  contact.shape = Shape::Sphere(spec.radius);
+  contact.offset = Pose{spec.centre, Quat::Identity()};
+  contact.material = spec.tyre;
+  contact.scope = ContactScope::kPlanesOnly;
+  // Friction along the axle (the rollers' free direction, turned by their angle) and across it
+  // (the grip), in the chassis frame; a plain tyre grips the same both ways, but its axes still
+  // turn with the wheel, so the solver's friction pyramid does not depend on the heading.
+  contact.friction_axis = spec.axle.normalized();
+  if (spec.rollers_along_axle) {
+    contact.friction_axis_turn = spec.roller_turn;
+  } else {
+    contact.material.mu2 = contact.material.mu;
+  }
+  Geom& sphere = node.AddGeom(contact, &chassis);
+  ContactWheel* self = wheel.get();
+  ctx.ObserveContacts(sphere, [self](const Contact&, SurfaceMaterial& surface, bool&) { self->Touch(surface); });
+  if (!spec.tyre_shielded) {
+    GeomSpec tyre = contact;
+    tyre.name = "tyre";
+    tyre.shape = Shape::Cylinder(spec.radius, spec.width);
+    tyre.offset = Pose{spec.centre, axle_in_chassis};
+    tyre.scope = ContactScope::kNoPlanes;
+    node.AddGeom(tyre, &chassis);  // a tyre touching a ball or a wall does not turn: no observer
+  }
+  return wheel;
+}
+
 /// Spins a wheel body at `rate` (rad/s, about its axle as the hinge measures it) relative to the
 /// chassis, keeping its centre's velocity: what a drive's Placed does to roll its wheels with the
 /// robot's new motion. `axle` is the wheel's axle in the chassis frame (WheelSpec::axle).
@@ -117,6 +275,54 @@ inline void RollWheel(Body& wheel, const Body& chassis, const Vec3& axle, double
   t.angular = c.angular + chassis.GetPose().orientation * axle.normalized() * rate;
   wheel.SetTwist(t);
 }
+
+/// A drive's wheel as its model asks: a body on a motorised hinge (AddDrivenWheel) or a motorised
+/// contact on the chassis (AddContactWheel), behind one interface.
+class DrivenWheel {
+ public:
+  /// Builds the wheel: a body on a hinge when `as_body`, else a contact wheel carrying
+  /// `static_load` (N) standing.
+  DrivenWheel(RobotContext& ctx, const WheelSpec& spec, bool as_body, double static_load)
+      : chassis_(&ctx.Chassis()), axle_(spec.axle) {
+    if (as_body) {
+      hinge_ = &AddDrivenWheel(ctx, spec);
+      body_ = ctx.Node().FindChild(spec.node_name)->FindBody("wheel");
+    } else {
+      contact_ = AddContactWheel(ctx, spec, static_load);
+    }
+  }
+  /// Drives the wheel toward `rate` (rad/s, relative to the chassis) with at most `max_torque` N·m.
+  void SetMotor(double rate, double max_torque) {
+    if (contact_) {
+      contact_->SetMotor(rate, max_torque);
+    } else {
+      hinge_->SetMotor(rate, max_torque);
+    }
+  }
+  /// The wheel's rate about its axle relative to the chassis, rad/s.
+  double Rate() const { return contact_ ? contact_->Rate() : hinge_->Rate(); }
+  /// Steps a contact wheel's motor (a body's is ODE's): call once a step in PreStep, after SetMotor.
+  void Step(double dt) {
+    if (contact_) contact_->Step(dt);
+  }
+  /// Spins the wheel at `rate` at once, rolling with the chassis: a robot put down moving.
+  void Roll(double rate) {
+    if (contact_) {
+      contact_->Roll(rate);
+    } else {
+      RollWheel(*body_, *chassis_, axle_, rate);
+    }
+  }
+  /// The wheel's body, or nullptr for a contact wheel.
+  Body* WheelBody() const { return body_; }
+
+ private:
+  Body* chassis_;
+  Vec3 axle_;
+  Joint* hinge_ = nullptr;
+  Body* body_ = nullptr;
+  std::unique_ptr<ContactWheel> contact_;
+};
 
 }  // namespace v1
 }  // namespace ubersim

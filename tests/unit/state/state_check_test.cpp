@@ -2,10 +2,14 @@
 // The kernel's state checks: the penetration depth they rest on, then each check firing on a
 // deliberately broken Div A world and staying quiet on a sound one.
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <sstream>
 
 #include <gtest/gtest.h>
+
+#include <unistd.h>
 
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/model.hpp"
@@ -75,8 +79,9 @@ struct DivA : ::testing::Test {
                      [this](PluginKind k, const std::string& id) { return registry.Find(k, id).schema_json; }};
   std::unique_ptr<World> world;
 
-  void SetUp() override {
-    WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-a.yaml");
+  void SetUp() override { Build(UBERSIM_SOURCE_DIR "/models/worlds/div-a.yaml"); }
+  void Build(const std::string& world_file) {
+    WorldModel model = loader.LoadWorld(world_file);
     model.transports.clear();
     world = std::make_unique<World>(model, registry, log, false);
   }
@@ -104,6 +109,41 @@ struct DivA : ::testing::Test {
   }
 };
 
+// Div A with the robots' wheels as bodies on hinges (`wheel_bodies: true`), for the checks of a
+// wheel's own body.
+struct DivAWheelBodies : DivA {
+  void SetUp() override {
+    const std::filesystem::path dir = std::filesystem::temp_directory_path();
+    const std::string tag = std::to_string(::getpid());
+    robot_file = (dir / ("ubersim-state-check-robot-" + tag + ".yaml")).string();
+    world_file = (dir / ("ubersim-state-check-world-" + tag + ".yaml")).string();
+    std::string robot = Read(UBERSIM_SOURCE_DIR "/models/robots/ssl-omni-2026.yaml");
+    robot.replace(robot.find("  plugin: omni\n"), 14, "  plugin: omni\n  wheel_bodies: true\n");
+    std::ofstream(robot_file) << robot;
+    std::string w = Read(UBERSIM_SOURCE_DIR "/models/worlds/div-a.yaml");
+    for (std::size_t at = w.find("../robots/ssl-omni-2026.yaml"); at != std::string::npos;
+         at = w.find("../robots/ssl-omni-2026.yaml", at)) {
+      w.replace(at, 28, robot_file);
+    }
+    for (std::size_t at = w.find("../"); at != std::string::npos; at = w.find("../", at)) {
+      w.replace(at, 3, UBERSIM_SOURCE_DIR "/models/");
+    }
+    std::ofstream(world_file) << w;
+    Build(world_file);
+  }
+  void TearDown() override {
+    std::filesystem::remove(robot_file);
+    std::filesystem::remove(world_file);
+  }
+  static std::string Read(const std::string& file) {
+    std::ifstream in(file);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  }
+  std::string robot_file, world_file;
+};
+
 const RobotId kBlue3{Team::kBlue, 3}, kYellow4{Team::kYellow, 4};
 
 TEST_F(DivA, ASoundWorldHasNoFindingsBeforeAndAfterTwoSecondsOfPlay) {
@@ -119,7 +159,7 @@ TEST_F(DivA, ASoundWorldHasNoFindingsBeforeAndAfterTwoSecondsOfPlay) {
 TEST_F(DivA, ARobotSunkIntoTheCarpetIsNamed) {
   BodyImpl& chassis = Body("blue/3", "chassis");
   Pose p = chassis.GetPose();
-  p.position.z() -= 0.06;  // the shell's bottom, 15 mm up, now 45 mm under
+  p.position.z() -= 0.06;  // the shell's bottom, 15 mm up, now 45 mm under; its wheels 60 mm
   chassis.SetPose(p);
   const auto found = Check();
   ASSERT_EQ(found.size(), 1u) << All(found);
@@ -127,12 +167,14 @@ TEST_F(DivA, ARobotSunkIntoTheCarpetIsNamed) {
   EXPECT_EQ(found[0].object.kind, StateObject::Kind::kRobot);
   EXPECT_EQ(found[0].object.robot, kBlue3);
   EXPECT_EQ(found[0].object.name, "robot blue 3");
-  EXPECT_EQ(found[0].part, "shell");
-  EXPECT_NEAR(found[0].value, 0.045, 1e-6);
-  EXPECT_NE(found[0].Describe().find("45.0 mm below the carpet"), std::string::npos) << found[0].Describe();
+  // The first of its parts under the carpet: its first wheel's contact (a contact wheel, on the
+  // chassis).
+  EXPECT_EQ(found[0].part, "wheel0/carpet_contact");
+  EXPECT_NEAR(found[0].value, 0.06, 1e-6);
+  EXPECT_NE(found[0].Describe().find("60.0 mm below the carpet"), std::string::npos) << found[0].Describe();
 }
 
-TEST_F(DivA, TheBallUnderTheCarpetAndAWheelOnlyJustInIt) {
+TEST_F(DivAWheelBodies, TheBallUnderTheCarpetAndAWheelOnlyJustInIt) {
   Pose b = WorldAttorney::Ball(*world).GetPose();
   b.position.z() = 0.005;  // 16.5 mm under
   WorldAttorney::Ball(*world).SetPose(b);
@@ -147,7 +189,7 @@ TEST_F(DivA, TheBallUnderTheCarpetAndAWheelOnlyJustInIt) {
   EXPECT_NEAR(found[0].value, 0.0165, 1e-6);
 }
 
-TEST_F(DivA, ARobotLeaningPastTwentyDegreesHasTippedAWheelTurnedAnyWayHasNot) {
+TEST_F(DivAWheelBodies, ARobotLeaningPastTwentyDegreesHasTippedAWheelTurnedAnyWayHasNot) {
   BodyImpl& chassis = Body("blue/3", "chassis");
   const Pose upright = chassis.GetPose();
   const auto lean = [&](double deg) {
@@ -259,7 +301,7 @@ TEST_F(DivA, TheBallBeyondTheWallsOuterFaceIsOutsideInsideTheWallItIsNot) {
   EXPECT_TRUE(Check().empty()) << All(Check());
 }
 
-TEST_F(DivA, ANanVelocityOnAWheelIsNamedAndSilencesTheRobotsOtherChecks) {
+TEST_F(DivAWheelBodies, ANanVelocityOnAWheelIsNamedAndSilencesTheRobotsOtherChecks) {
   BodyImpl& wheel = Body("yellow/2/wheel1", "wheel");
   dBodySetLinearVel(wheel.id(), kNan, 0.0, 0.0);
   // Also sunk and too fast (its chassis comes before the wheel): a robot with a broken value
