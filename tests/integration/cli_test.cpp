@@ -183,7 +183,7 @@ TEST(Cli, BenchPrintsEachWorldWithItsBaselineAndRefusesBadOptions) {
   const Result r = RunUbersim("bench ssl-2003 --duration 0.05 --physics-step 0.002 --markdown " +
                               (TempDir() / "bench.md").string());
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("ssl-2003   precise      10    2.00"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ssl-2003   fast         10    2.00"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("machine: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("bench.md"), std::string::npos) << r.output;
   const Result bad = RunUbersim("bench --physics-step 0.5");
@@ -201,11 +201,12 @@ TEST(Cli, BenchPrintsEachWorldWithItsBaselineAndRefusesBadOptions) {
 }
 
 TEST(Cli, OneFlagChoosesThePhysicsProfileAndRunAndBenchSayWhichIsInForce) {
-  const Result precise = RunUbersim("run --fast --duration 0.1 --quiet --no-viewer --local-only");
+  // The shipped worlds run fast; precise is one flag away.
+  const Result precise = RunUbersim("run --fast --duration 0.1 --quiet --no-viewer --local-only --profile precise");
   EXPECT_EQ(precise.exit_code, 0) << precise.output;
   EXPECT_NE(precise.output.find("physics profile precise: step 1 ms, 20 solver iterations, 4 contacts per pair\n"),
             std::string::npos) << precise.output;
-  const Result fast = RunUbersim("run --fast --duration 0.1 --quiet --no-viewer --local-only --profile fast");
+  const Result fast = RunUbersim("run --fast --duration 0.1 --quiet --no-viewer --local-only");
   EXPECT_EQ(fast.exit_code, 0) << fast.output;
   EXPECT_NE(fast.output.find("physics profile fast: step 5 ms, 10 solver iterations (2 without the ball), 1 contact per pair"),
             std::string::npos) << fast.output;

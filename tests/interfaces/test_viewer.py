@@ -49,7 +49,7 @@ BALL_RGB = (0xff, 0x8a, 0x1f)
 TEAM_RGB = {"blue": (0x2c, 0x6c, 0xff), "yellow": (0xff, 0xd5, 0x1c)}
 
 VISION_FRAME_RATE = 60.0   # Hz, preset ideal
-STEP = 0.001               # s, the div-b world's physics step
+STEP = 0.005               # s, the div-b world's physics step (the fast profile)
 ENDPOINT_RE = re.compile(r"(http://127\.0\.0\.1:(\d+)/) \(open it in a browser\)")
 
 STATE_JS = """

@@ -127,7 +127,7 @@ execute_process(COMMAND ${CMAKE_COMMAND} -E env "UBERSIM_PLUGIN_PATH=${plugin_bu
 if(NOT rc EQUAL 3 OR NOT out MATCHES "typo-robot.yaml:6:3: .*max_sped")
   message(FATAL_ERROR "the typo was not reported as file:6:3 with the key (exit ${rc}):\n${out}${err}")
 endif()
-# 9. Next year's robot: a team's mecanum drive (wheel bodies, rollers at 45° through
+# 9. Next year's robot: a team's mecanum drive (contact wheels, rollers at 45° through
 #    WheelSpec::roller_turn) built against the install alone, then checked the way docs/plugins.md
 #    tells a team to: the installed `ubersim validate-physics --robot` drives it forward, fast,
 #    sideways, diagonally and turning, and at its acceleration limit, against its own limits.

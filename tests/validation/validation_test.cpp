@@ -77,10 +77,11 @@ TEST(PhysicsValidation, OmniRobotSpeedsUpAtItsLimit) { RunAndCheck("omni_acceler
 TEST(PhysicsValidation, OmniForceRobotHoldsCommandedVelocities) {
   const ScenarioResult r = RunAndCheck("omni_force_steady_velocity");
   // One rigid body pushed by the wheel forces: the only steady error is the rollers' drag over
-  // the wheels' servo stiffness, about a millimetre per second (at fast's 5 ms steps five: the
-  // servo's force is the one that would reach the target in one step).
-  EXPECT_NEAR(r.Get("forward_speed").value, 1.0, 0.002);
-  EXPECT_NEAR(r.Get("sideways_speed").value, 1.0, 0.002);
+  // the wheels' servo stiffness, about a millimetre per second at precise, five at the shipped
+  // fast profile's 5 ms steps (the servo's force is the one that would reach the target in one
+  // step): 2.4 and 5.3 mm/s measured.
+  EXPECT_NEAR(r.Get("forward_speed").value, 1.0, 0.006);
+  EXPECT_NEAR(r.Get("sideways_speed").value, 1.0, 0.006);
   EXPECT_NEAR(r.Get("turning_angular_speed").value, 1.0, 0.001);
 }
 

@@ -5,6 +5,7 @@
 // firmware's servo loop (the SDK's VelocityServo) ramps the command; the wheel speeds follow from
 // where each wheel sits and which way its rollers grip.
 #include <array>
+#include <memory>
 #include <cmath>
 #include <variant>
 
@@ -40,6 +41,8 @@ class TeamMecanum final : public ubersim::Drive {
     tyre.mu = 0.05;  // along the rollers' free direction
     tyre.mu2 = 0.8;  // across it: the grip
     const double chassis_z = ctx.Chassis().GetPose().position.z();  // its origin above the carpet
+    // Each wheel carries a quarter of the robot standing, its wheels included.
+    const double load = (ctx.Chassis().Mass() + 4 * ubersim::WheelSpec{}.mass) * ctx.Gravity().norm() / 4;
     for (std::size_t i = 0; i < 4; ++i) {
       ubersim::WheelSpec spec;
       spec.node_name = "wheel" + std::to_string(i);
@@ -51,7 +54,7 @@ class TeamMecanum final : public ubersim::Drive {
       spec.roller_turn = roller[i];
       spec.holding_torque = max_torque_;
       spec.tyre_shielded = ubersim::ShellShieldsWheel(ctx.BodyInfo(), ctx.BallRadius(), spec);
-      hinges_[i] = &ubersim::AddDrivenWheel(ctx, spec);
+      wheels_[i] = ubersim::AddContactWheel(ctx, spec, load);  // a motorised contact on the chassis
       // The rollers pass on the contact's motion along their grip direction only: a turn of
       // the wheel moves the contact r·ω forward, of which cos(roller) lies along the grip.
       const Vec3 grip = Eigen::AngleAxisd(roller[i], Vec3::UnitZ()) * Vec3::UnitX();
@@ -73,7 +76,7 @@ class TeamMecanum final : public ubersim::Drive {
   ubersim::DriveFeedback Feedback() const override {
     ubersim::DriveFeedback f;
     Eigen::Vector4d w;
-    for (std::size_t i = 0; i < 4; ++i) w(static_cast<Eigen::Index>(i)) = hinges_[i]->Rate();
+    for (std::size_t i = 0; i < 4; ++i) w(static_cast<Eigen::Index>(i)) = wheels_[i]->Rate();
     f.wheel_speeds.assign(w.data(), w.data() + 4);
     const Eigen::Vector3d v = to_chassis_ * w;
     f.local_velocity.linear = Vec3(v.x(), v.y(), 0.0);
@@ -93,12 +96,15 @@ class TeamMecanum final : public ubersim::Drive {
     const Eigen::Vector4d w = to_wheels_ * Eigen::Vector3d(set.linear.x(), set.linear.y(), set.angular);
     const double peak = w.cwiseAbs().maxCoeff();
     const double scale = peak > max_wheel_speed_ ? max_wheel_speed_ / peak : 1.0;
-    for (std::size_t i = 0; i < 4; ++i) hinges_[i]->SetMotor(scale * w(static_cast<Eigen::Index>(i)), max_torque_);
+    for (std::size_t i = 0; i < 4; ++i) {
+      wheels_[i]->SetMotor(scale * w(static_cast<Eigen::Index>(i)), max_torque_);
+      wheels_[i]->Step(step.dt);
+    }
   }
 
  private:
   ubersim::RobotContext* ctx_ = nullptr;
-  std::array<ubersim::Joint*, 4> hinges_{};
+  std::array<std::unique_ptr<ubersim::ContactWheel>, 4> wheels_;
   Eigen::Matrix<double, 4, 3> to_wheels_;   // wheel speeds (rad/s) from (forward, left, angular)
   Eigen::Matrix<double, 3, 4> to_chassis_;  // and back: odometry
   double radius_ = 0.029;

@@ -190,13 +190,16 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   EXPECT_EQ(w.robots[0].id, (ubersim::RobotId{ubersim::Team::kBlue, 0}));
   EXPECT_EQ(w.robots[6].id, (ubersim::RobotId{ubersim::Team::kYellow, 0}));
   EXPECT_EQ(w.robots[0].model->drive->plugin, "omni");
-  EXPECT_DOUBLE_EQ(w.physics.step, 0.001);
-  EXPECT_EQ(w.physics.solver_iterations, 20);
+  // The shipped worlds run the fast profile.
+  EXPECT_EQ(w.physics.profile, "fast");
+  EXPECT_DOUBLE_EQ(w.physics.step, 0.005);
+  EXPECT_EQ(w.physics.solver_iterations, 10);
+  EXPECT_EQ(w.physics.IterationsWithoutBall(), 2);
   EXPECT_DOUBLE_EQ(w.physics.erp, 0.2);
   EXPECT_DOUBLE_EQ(w.physics.cfm, 1e-7);
   EXPECT_DOUBLE_EQ(w.physics.gravity.z(), -9.81);
   EXPECT_EQ(w.physics.broadphase, "sap");
-  EXPECT_EQ(w.physics.max_contacts, 4);
+  EXPECT_EQ(w.physics.max_contacts, 1);
   EXPECT_EQ(w.seed, 1u);
   EXPECT_TRUE(w.plugin_paths.empty());
   // SSL-Vision out, grSim and the simulation protocol in, on their usual ports.
