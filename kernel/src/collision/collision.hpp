@@ -168,6 +168,9 @@ class CollisionManager {
   void AddContacts(GeomImpl& a, GeomImpl& b, int n, const double* approach = nullptr);
   // The swept test of every fast ball (SetSweptBallStep).
   void SweepFastBalls();
+  // One ball at `from` moving at `velocity` relative to `other` against `other`: a contact where
+  // its surface would reach it within the step.
+  void SweepBallAt(GeomImpl& ball, GeomImpl& other, const Vec3& from, const Vec3& velocity, double radius);
   // The speculative contacts of robots about to meet (SetSweptRobotStep).
   void SweepRobots();
   template <typename F>
