@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../common/sanitizer.hpp"
 #include "bare_ode_mirror.hpp"
 #include "bench.hpp"
 #include "instructions.hpp"
@@ -325,17 +326,7 @@ TEST(CallgrindOutput, TheRunsGetTheBenchsOwnSettings) {
 
 // The real thing, on a tiny run: this test's own build of `ubersim` twice under callgrind.
 // Valgrind cannot run a binary built with AddressSanitizer (the suite's sanitizer pass).
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
+using testing::kAddressSanitizer;
 
 TEST_F(BenchWorld, InstructionsAreCountedUnderCallgrindWhenValgrindIsInstalled) {
   if (kAddressSanitizer) GTEST_SKIP() << "valgrind cannot run an AddressSanitizer build";

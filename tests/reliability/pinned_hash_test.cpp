@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../common/sanitizer.hpp"
 #include "../common/shipped_worlds.hpp"
 #include "shared/random_play.hpp"
 #include "ubersim/kernel/snapshot.hpp"
@@ -46,17 +47,6 @@ constexpr Pinned kPinned[] = {
 // regular build since the wheels became contacts (129c6f7; ssl-2003 and div-a agree to the bit).
 // The cause is not found yet: IEEE arithmetic without contraction should agree. Until it is,
 // that build pins its own div-b values, as repeatable from run to run as gcc's.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitizerBuild = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitizerBuild = true;
-#else
-constexpr bool kSanitizerBuild = false;
-#endif
-#else
-constexpr bool kSanitizerBuild = false;
-#endif
 constexpr Pinned kSanitizerDivB = {"div-b", 0xcef0f2958a717af0ULL, 0x08158a670cda0156ULL};
 
 // The world's name in gtest's output, not the struct's bytes.
@@ -72,7 +62,7 @@ class PinnedHash : public ::testing::TestWithParam<Pinned> {};
 
 TEST_P(PinnedHash, ShippedWorldsStepToTheRecordedStates) {
   const Pinned& pinned =
-      kSanitizerBuild && std::string(GetParam().world) == kSanitizerDivB.world ? kSanitizerDivB : GetParam();
+      testing::kAddressSanitizer && std::string(GetParam().world) == kSanitizerDivB.world ? kSanitizerDivB : GetParam();
   testing::ShippedWorlds s;
   const WorldModel model = s.Load(pinned.world);
   World world(model, s.registry, s.log, false);
