@@ -244,6 +244,7 @@ void CollisionManager::Refile() {
   balls_found_ = false;
   balls_.clear();
   sweep_targets_.clear();
+  sweep_shells_.clear();
   hulls_found_ = false;
   hulls_.clear();
   hull_touching_.clear();
@@ -514,7 +515,11 @@ void CollisionManager::SweepFastBalls() {
   if (!balls_found_) {  // the scene is complete by the first step; a reset builds a new manager
     graph_.Root().ForEachGeom([&](GeomImpl& g) {
       if (g.is_ball() && g.body()) balls_.push_back(&g);
-      if (!g.is_plane()) sweep_targets_.push_back(&g);
+      if (g.prism() && g.body()) {
+        sweep_shells_.push_back(&g);
+      } else if (!g.is_plane()) {
+        sweep_targets_.push_back(&g);
+      }
     });
     balls_found_ = true;
   }
@@ -525,9 +530,9 @@ void CollisionManager::SweepFastBalls() {
     const Vec3 from = ball->GetPose().position;
     // A robot's shell by the ball's speed relative to it: a robot driving at 1.4 m/s into a
     // resting ball moved 7 mm a step at 5 ms, and had the ball 11 mm inside its shell.
-    for (GeomImpl* target : sweep_targets_) {
+    for (GeomImpl* target : sweep_shells_) {
       GeomImpl& shell = *target;
-      if (!shell.prism() || !shell.body() || !MayCollide(*ball, shell)) continue;
+      if (!MayCollide(*ball, shell)) continue;
       const Vec3 relative = v - shell.body()->GetTwist().linear;
       SweepBallAt(*ball, shell, from, relative, radius);
     }
@@ -539,9 +544,7 @@ void CollisionManager::SweepFastBalls() {
     const bool slow = reach <= 0.5 * radius;
     for (GeomImpl* target : sweep_targets_) {
       GeomImpl& other = *target;
-      if (&other == ball || (other.prism() && other.body()) || (slow && !other.body()) || !MayCollide(*ball, other)) {
-        continue;
-      }
+      if (&other == ball || (slow && !other.body()) || !MayCollide(*ball, other)) continue;
       SweepBallAt(*ball, other, from, v, radius);
     }
   }

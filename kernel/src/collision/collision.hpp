@@ -206,7 +206,8 @@ class CollisionManager {
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> ball_touching_;  // this step's ball pairs
   OdeGeom ray_;           // the swept test's ray, reused
   std::vector<GeomImpl*> balls_;  // the balls, found at the first swept test
-  std::vector<GeomImpl*> sweep_targets_;  // what a swept ball may reach: every geometry but planes
+  std::vector<GeomImpl*> sweep_targets_;  // what a swept ball may reach: every geometry but planes and shells
+  std::vector<GeomImpl*> sweep_shells_;   // robots' shells, swept by the ball's speed relative to them
   bool balls_found_ = false;
   double swept_robot_step_ = 0.0;
   double robot_contact_erp_ = -1.0;

@@ -123,8 +123,8 @@ class ContactWheel {
   /// tyre's spring spreads it as on a real robot, and turns and braking shift it.
   static constexpr double kTyreSink = 0.00005;
 
-  /// Use AddContactWheel.
-  ContactWheel(Body& chassis, const WheelSpec& spec, double static_load)
+  /// Use AddContactWheel. `gravity` (m/s²) turns the static load into the mass the tyre carries.
+  ContactWheel(Body& chassis, const WheelSpec& spec, double static_load, double gravity)
       : chassis_(&chassis),
         axle_(spec.axle.normalized()),
         rolling_(spec.axle.normalized().cross(Vec3::UnitZ())),
@@ -136,7 +136,7 @@ class ContactWheel {
         static_load_(static_load),
         // A tyre giving kTyreSink under its static load, critically damped for its share of the robot.
         stiffness_(static_load / kTyreSink),
-        damping_(2.0 * std::sqrt(stiffness_ * static_load / 9.81)),
+        damping_(gravity > 0.0 ? 2.0 * std::sqrt(stiffness_ * static_load / gravity) : 0.0),
         max_torque_(spec.holding_torque) {}
   ContactWheel(const ContactWheel&) = delete;
   ContactWheel& operator=(const ContactWheel&) = delete;
@@ -153,7 +153,7 @@ class ContactWheel {
   void Roll(double rate) {
     rate_ = rate;
     target_ = rate;
-    Aim();
+    Aim(chassis_->GetPose().orientation);
   }
   /// The motor's step of `dt` s toward its rate; call once a step in PreStep, after SetMotor.
   /// Within its torque the motor holds the rate it is asked for, the carpet's pull on the rim
@@ -162,23 +162,22 @@ class ContactWheel {
   /// direction). The chassis takes the reaction of the wheel's change of spin.
   void Step(double dt) {
     dt_ = dt;
+    const Pose pose = chassis_->GetPose();
     const double wanted = spin_inertia_ * (target_ - rate_) / dt;
     double torque = std::clamp(wanted, -max_torque_, max_torque_);
     if (torque != wanted && touched_) {
-      const Pose pose = chassis_->GetPose();
       const double ground = chassis_->PointVelocity(pose.position + pose.orientation * contact_point_)
                                 .dot(pose.orientation * rolling_);
       const double slip = rate_ * radius_ - ground;  // the rim over the carpet
       const double pull = static_load_ * radius_ * (grip_mu_ * grip_share_ + free_mu_ * free_share_);
       if (std::abs(slip) > 1e-3) torque -= std::copysign(pull, slip);
-      // The pull slows a slipping rim toward the carpet's speed, never past it.
-      const double most = spin_inertia_ * (target_ - rate_) / dt;
-      if ((most > 0 && torque > most) || (most < 0 && torque < most)) torque = most;
+      // The pull slows a slipping rim toward the carpet's speed, never past the rate asked for.
+      if ((wanted > 0 && torque > wanted) || (wanted < 0 && torque < wanted)) torque = wanted;
     }
     touched_ = false;
     rate_ += torque * dt / spin_inertia_;
-    if (torque != 0.0) chassis_->AddTorque(chassis_->GetPose().orientation * axle_ * -torque);
-    Aim();
+    if (torque != 0.0) chassis_->AddTorque(pose.orientation * axle_ * -torque);
+    Aim(pose.orientation);
   }
   /// The contact observer's part: the tyre's surface moves at the rim's speed (the contact takes
   /// the part along the rollers' free direction as their drag, the rest as the grip), and
@@ -201,7 +200,8 @@ class ContactWheel {
   }
 
  private:
-  void Aim() { surface_velocity_ = chassis_->GetPose().orientation * rolling_ * (-rate_ * radius_); }
+  // The rim's velocity over the chassis, world frame, with the chassis turned by `orientation`.
+  void Aim(const Quat& orientation) { surface_velocity_ = orientation * rolling_ * (-rate_ * radius_); }
 
   Body* chassis_;
   Vec3 axle_;             // chassis frame
@@ -235,7 +235,7 @@ inline std::unique_ptr<ContactWheel> AddContactWheel(RobotContext& ctx, const Wh
   const Quat axle_in_chassis = Quat::FromTwoVectors(Vec3::UnitZ(), spec.axle.normalized());
   chassis.AddFixedMass(MassSpec::Solid(Shape::Cylinder(spec.radius, spec.width), spec.mass),
                        Pose{spec.centre, axle_in_chassis});
-  auto wheel = std::make_unique<ContactWheel>(chassis, spec, static_load);
+  auto wheel = std::make_unique<ContactWheel>(chassis, spec, static_load, ctx.Gravity().norm());
   SceneNode& node = ctx.Node().AddChild(spec.node_name);
   GeomSpec contact;
   contact.name = "carpet_contact";

@@ -78,7 +78,7 @@ TEST(ContactWheel, TheMotorSpinsTheRotorUpWithinItsTorqueAndTheChassisTakesTheRe
   spec.mass = 0.05;
   spec.rotor_inertia = 1.6e-4;
   spec.axle = Vec3::UnitY();
-  ContactWheel wheel(*b.chassis, spec, 0.0);  // in the air: nothing touches it
+  ContactWheel wheel(*b.chassis, spec, 0.0, 9.81);  // in the air: nothing touches it
   const double inertia = 0.5 * 0.05 * 0.029 * 0.029 + 1.6e-4, torque = 0.3, dt = 0.001;
   wheel.SetMotor(100.0, torque);
   wheel.Step(dt);
