@@ -37,17 +37,19 @@ struct Pinned {
 // bodies) and a ball slower than half its radius a step began to be swept against robots. And
 // again when the shipped worlds began to run the fast profile (5 ms steps: 2000 steps are 10 s),
 // and when the fast-ball sweep began to take a robot's shell by the ball's speed relative to it.
+// And again when two shells touching at one level got the other level's contact too, with its
+// gap (NearLevel in upright_prism.cpp).
 constexpr Pinned kPinned[] = {
-    {"ssl-2003", 0x153689b9df0daaf9ULL, 0xca40851374eb6e11ULL},
-    {"div-b", 0x0dd00914183f2650ULL, 0x8aed6a779b2101e3ULL},
-    {"div-a", 0xa654973a6d86ee4fULL, 0xb5ba15b2af73ee84ULL},
+    {"ssl-2003", 0x3d1541a79c2301f1ULL, 0x3f824f09ccd91bc7ULL},
+    {"div-b", 0xa79f3e9f68c051c7ULL, 0x09073091deb847ceULL},
+    {"div-a", 0x62e909973a5a41a2ULL, 0x04dc293340077ccdULL},
 };
 
 // The suite's sanitizer pass (clang, AddressSanitizer) steps div-b to other states than gcc's
 // regular build since the wheels became contacts (129c6f7; ssl-2003 and div-a agree to the bit).
 // The cause is not found yet: IEEE arithmetic without contraction should agree. Until it is,
 // that build pins its own div-b values, as repeatable from run to run as gcc's.
-constexpr Pinned kSanitizerDivB = {"div-b", 0xcef0f2958a717af0ULL, 0x08158a670cda0156ULL};
+constexpr Pinned kSanitizerDivB = {"div-b", 0xe9d0812bd238f7adULL, 0xabc12b2885725b65ULL};
 
 // The world's name in gtest's output, not the struct's bytes.
 void PrintTo(const Pinned& p, std::ostream* out) { *out << p.world; }

@@ -718,6 +718,14 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double
 
     dContact c{};
     c.geom = cg;
+    // A level of two shells still apart (CollideUprightPrisms writes its gap as a depth below
+    // zero) is speculative, as a swept contact: it holds once the gap has closed in the step.
+    double gap_speed = approach ? approach[i] : -1.0;
+    if (cg.depth < 0.0) {
+      if (!approach && step_ <= 0) continue;  // no step to close it in
+      c.geom.depth = 0.0;
+      if (!approach) gap_speed = -cg.depth / step_;
+    }
     int mode = dContactApprox1;
     c.surface.mu = surface.mu;
     if (directional) {
@@ -769,11 +777,11 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double
       mode |= dContactMu2;
       c.surface.mu2 = surface.mu2;
     }
-    if (approach) {
+    if (gap_speed >= 0.0) {
       // Speculative: the bodies may close the gap within the step, no more; no bounce before
       // they touch.
       mode |= dContactMotionN;
-      c.surface.motionN = -approach[i];
+      c.surface.motionN = -gap_speed;
     } else if (surface.bounce > 0) {
       mode |= dContactBounce;
       c.surface.bounce = surface.bounce;

@@ -196,16 +196,41 @@ TEST(UprightPrism, ShellsPutOntoEachOtherPushAlongOneDirectionAtBothLevels) {
 
 TEST(UprightPrism, ALeaningShellTouchesWhereItLeans) {
   // Round shells 1 mm apart; a leans 0.05 rad toward b: its top reaches 3.3 mm further, its
-  // bottom 3.3 mm less. They touch at the top only, 2.3 mm deep.
+  // bottom 3.3 mm less. They touch at the top only, 2.3 mm deep; the bottom, 4.3 mm apart, is
+  // written too, with its gap as a depth below zero (speculative: it holds once the gap closes).
   Pose leaning = Upright(0, 0, 0);
   leaning.orientation = Quat(Eigen::AngleAxisd(0.05, Vec3::UnitY()));
   const Pose upright = Upright(0.181, 0, 0);
   dContactGeom c[4];
-  ASSERT_EQ(CollideUprightPrisms(kRound, leaning, kRound, upright, 4, c), 1);
+  ASSERT_EQ(CollideUprightPrisms(kRound, leaning, kRound, upright, 4, c), 2);
   const double reach = kRound.half_height * std::cos(0.05) * std::tan(0.05);
-  EXPECT_NEAR(c[0].depth, reach - 0.001, 1e-5);
-  EXPECT_NEAR(c[0].pos[2], 0.08 + kRound.half_height * std::cos(0.05), 1e-9);
-  EXPECT_NEAR(c[0].normal[0], -1.0, 1e-9);
+  const dContactGeom& top = c[0].pos[2] > c[1].pos[2] ? c[0] : c[1];
+  const dContactGeom& bottom = c[0].pos[2] > c[1].pos[2] ? c[1] : c[0];
+  EXPECT_NEAR(top.depth, reach - 0.001, 1e-5);
+  EXPECT_NEAR(top.pos[2], 0.08 + kRound.half_height * std::cos(0.05), 1e-9);
+  EXPECT_NEAR(top.normal[0], -1.0, 1e-9);
+  EXPECT_NEAR(bottom.depth, -(reach + 0.001), 1e-5);
+  EXPECT_NEAR(bottom.pos[2], 0.08 - kRound.half_height * std::cos(0.05), 1e-9);
+  EXPECT_NEAR(bottom.normal[0], -1.0, 1e-9);
+  // The bottom contact sits on the bottom's cross-sections, 3.3 mm back with the lean.
+  EXPECT_NEAR(top.pos[0] - bottom.pos[0], reach, 1e-4);
+}
+
+// Two robots arriving at a touch within the same step touch at one level only (the other a
+// hair apart, by the lean their driving gives them): both levels are written, or a crash pushed
+// at the shells' bottoms alone, below the centres of mass, and threw both robots over. Leaning
+// farther apart than 1 cm at the other level, it is left out.
+TEST(UprightPrism, ALevelNearlyTouchingIsWrittenWithItsGap) {
+  dContactGeom c[4];
+  Pose tilted = Upright(0, 0, 0);
+  tilted.orientation = Quat(Eigen::AngleAxisd(0.001, Vec3::UnitY()));  // top 0.07 mm toward b, bottom away
+  ASSERT_EQ(CollideUprightPrisms(kRound, tilted, kRound, Upright(0.18, 0, 0), 4, c), 2);
+  EXPECT_GE(std::max(c[0].depth, c[1].depth), 0.0);
+  EXPECT_LT(std::min(c[0].depth, c[1].depth), 0.0);
+  EXPECT_GT(std::min(c[0].depth, c[1].depth), -0.0002);
+  tilted.orientation = Quat(Eigen::AngleAxisd(0.2, Vec3::UnitY()));  // 13 mm in at the top, 13 mm apart below
+  ASSERT_EQ(CollideUprightPrisms(kRound, tilted, kRound, Upright(0.18, 0, 0), 4, c), 1);
+  EXPECT_GT(c[0].depth, 0.0);
 }
 
 TEST(UprightPrism, ShellsAtDifferentHeightsDoNotTouch) {
