@@ -10,6 +10,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -90,6 +91,35 @@ struct TwoRobots {
 
 constexpr double kDeg = M_PI / 180.0;
 
+// A robot as it was at a moment of a run: where, heading, velocity and turn (m, rad, m/s, rad/s).
+struct Moving {
+  Team team;
+  double x, y, yaw, vx, vy, spin;
+};
+
+// Puts each robot down as it was, moving.
+void PutDown(TwoRobots& w, const std::vector<Moving>& robots) {
+  for (const Moving& m : robots) {
+    PositionEvent e;
+    e.target = Target::Robot({m.team, 0});
+    e.position = Vec3(m.x, m.y, 0);
+    e.yaw = m.yaw;
+    e.velocity = Vec3(m.vx, m.vy, 0);
+    e.angular_velocity = Vec3(0, 0, m.spin);
+    w.world->events().Post(e);
+  }
+  w.world->ProcessEvents();
+}
+
+// Tells each robot to keep the velocity it was put down with, in its own frame.
+void KeepMoving(TwoRobots& w, const std::vector<Moving>& robots) {
+  for (const Moving& m : robots) {
+    const double c = std::cos(m.yaw), s = std::sin(m.yaw);
+    w.world->events().Post(
+        CommandEvent{{m.team, 0}, LocalVelocityCommand{c * m.vx + s * m.vy, -s * m.vx + c * m.vy, m.spin}, {}, {}});
+  }
+}
+
 // Deepest shell-in-shell a crash may leave: at precise a 6 m/s crash closes 6 mm in the step
 // before its contact exists (plus the 0.5 mm contact layer); at fast the speculative contacts
 // meet the shells at their surfaces.
@@ -97,6 +127,33 @@ double CrashDepthLimit(const std::string& profile) { return profile == "precise"
 // How far a robot may still lean once a crash is over: back on its wheels (a wheel-body robot's
 // hinges sagged 1.5-2° at rest at two solver iterations; contact wheels stand level).
 constexpr double kRestingTilt = 3 * kDeg;
+
+// What a strike did over `seconds`: the robots keep their velocities for its first 0.1 s.
+struct Aftermath {
+  double deepest = 0;       // m, shell inside shell
+  double most_tilt = 0;     // rad, either robot from upright
+  double fastest_roll = 0;  // rad/s, either robot about a horizontal axis
+};
+Aftermath Strike(TwoRobots& w, const std::vector<Moving>& robots, double seconds) {
+  PutDown(w, robots);
+  StateCheckOptions overlap;
+  overlap.finite = overlap.speed = overlap.carpet = overlap.walls = false;
+  overlap.limits.robot_penetration = 0.0;
+  const int every = std::max(1, static_cast<int>(std::lround(0.01 / w.dt)));
+  Aftermath out;
+  for (int i = 0; i < static_cast<int>(std::lround(seconds / w.dt)); ++i) {
+    if (i % every == 0 && i * w.dt < 0.1) KeepMoving(w, robots);
+    w.world->Step();
+    for (const StateViolation& v : CheckState(*w.world, overlap)) {
+      if (v.other && v.other->kind == StateObject::Kind::kRobot) out.deepest = std::max(out.deepest, v.value);
+    }
+    for (const RobotState& r : w.world->GroundTruth().robots) {
+      out.most_tilt = std::max(out.most_tilt, std::acos(std::clamp((r.pose.orientation * Vec3::UnitZ()).z(), -1.0, 1.0)));
+      out.fastest_roll = std::max(out.fastest_roll, r.twist.angular.head<2>().norm());
+    }
+  }
+  return out;
+}
 
 class RobotCrash : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
 
@@ -339,36 +396,16 @@ TEST_P(RobotCrash, ARobotPutDownInsideAnotherWhileMovingDoesNotStrikeIt) {
 TEST_P(RobotCrash, AFrontStrikingARoundBackOffCentreDoesNotSpinThemIntoEachOther) {
   const auto& [profile, robot] = GetParam();
   TwoRobots w(profile, robot, -1.0, 1.5);
-  struct Moving {
-    Team team;
-    double x, y, yaw, vx, vy, spin;
-  };
-  const Moving robots[2] = {{Team::kBlue, -1.6887, 1.3730, 2.318, 1.571, -2.007, -0.92},    // driving backward
-                            {Team::kYellow, -1.6391, 1.1941, 1.802, -0.502, 1.827, 1.25}};  // front first
-  const auto command = [&] {  // each keeps its velocity, in its own frame
-    for (const Moving& m : robots) {
-      const double c = std::cos(m.yaw), s = std::sin(m.yaw);
-      w.world->events().Post(
-          CommandEvent{{m.team, 0}, LocalVelocityCommand{c * m.vx + s * m.vy, -s * m.vx + c * m.vy, m.spin}, {}, {}});
-    }
-  };
-  for (const Moving& m : robots) {
-    PositionEvent e;
-    e.target = Target::Robot({m.team, 0});
-    e.position = Vec3(m.x, m.y, 0);
-    e.yaw = m.yaw;
-    e.velocity = Vec3(m.vx, m.vy, 0);
-    e.angular_velocity = Vec3(0, 0, m.spin);
-    w.world->events().Post(e);
-  }
-  w.world->ProcessEvents();
+  const std::vector<Moving> robots = {{Team::kBlue, -1.6887, 1.3730, 2.318, 1.571, -2.007, -0.92},    // driving backward
+                                      {Team::kYellow, -1.6391, 1.1941, 1.802, -0.502, 1.827, 1.25}};  // front first
+  PutDown(w, robots);
   StateCheckOptions overlap;
   overlap.finite = overlap.speed = overlap.carpet = overlap.walls = false;
   overlap.limits.robot_penetration = 0.0;
   const int every = std::max(1, static_cast<int>(std::lround(0.01 / w.dt)));
   double deepest = 0, fastest_spin = 0;
   for (int i = 0; i < static_cast<int>(std::lround(0.3 / w.dt)); ++i) {
-    if (i % every == 0) command();
+    if (i % every == 0) KeepMoving(w, robots);
     w.world->Step();
     for (const StateViolation& v : CheckState(*w.world, overlap)) {
       if (v.other && v.other->kind == StateObject::Kind::kRobot) deepest = std::max(deepest, v.value);
@@ -386,48 +423,12 @@ TEST_P(RobotCrash, AFrontStrikingARoundBackOffCentreDoesNotSpinThemIntoEachOther
 TEST_P(RobotCrash, AnObliqueStrikeAtFullSpeedLeavesBothOnTheirWheels) {
   const auto& [profile, robot] = GetParam();
   TwoRobots w(profile, robot, -1.0, 1.5);
-  struct Moving {
-    Team team;
-    double x, y, yaw, vx, vy, spin;
-  };
-  const Moving robots[2] = {{Team::kBlue, 0.3580, 0.2966, 0.799, -1.083, -1.072, -1.03},
-                            {Team::kYellow, 0.1463, 0.2519, -0.624, 2.974, -0.084, -0.11}};
-  const auto command = [&] {
-    for (const Moving& m : robots) {
-      const double c = std::cos(m.yaw), s = std::sin(m.yaw);
-      w.world->events().Post(
-          CommandEvent{{m.team, 0}, LocalVelocityCommand{c * m.vx + s * m.vy, -s * m.vx + c * m.vy, m.spin}, {}, {}});
-    }
-  };
-  for (const Moving& m : robots) {
-    PositionEvent e;
-    e.target = Target::Robot({m.team, 0});
-    e.position = Vec3(m.x, m.y, 0);
-    e.yaw = m.yaw;
-    e.velocity = Vec3(m.vx, m.vy, 0);
-    e.angular_velocity = Vec3(0, 0, m.spin);
-    w.world->events().Post(e);
-  }
-  w.world->ProcessEvents();
-  StateCheckOptions overlap;
-  overlap.finite = overlap.speed = overlap.carpet = overlap.walls = false;
-  overlap.limits.robot_penetration = 0.0;
-  const int every = std::max(1, static_cast<int>(std::lround(0.01 / w.dt)));
-  double deepest = 0, most_tilt = 0, fastest_roll = 0;
-  for (int i = 0; i < static_cast<int>(std::lround(1.0 / w.dt)); ++i) {
-    if (i % every == 0 && i * w.dt < 0.1) command();
-    w.world->Step();
-    for (const StateViolation& v : CheckState(*w.world, overlap)) {
-      if (v.other && v.other->kind == StateObject::Kind::kRobot) deepest = std::max(deepest, v.value);
-    }
-    for (const RobotState& r : w.world->GroundTruth().robots) {
-      most_tilt = std::max(most_tilt, std::acos(std::clamp((r.pose.orientation * Vec3::UnitZ()).z(), -1.0, 1.0)));
-      fastest_roll = std::max(fastest_roll, r.twist.angular.head<2>().norm());
-    }
-  }
-  EXPECT_LT(deepest, CrashDepthLimit(profile)) << "shell inside shell, m";
-  EXPECT_LT(most_tilt, 10 * kDeg) << "most tilt, rad";
-  EXPECT_LT(fastest_roll, 5.0) << "rad/s about a horizontal axis";
+  const std::vector<Moving> robots = {{Team::kBlue, 0.3580, 0.2966, 0.799, -1.083, -1.072, -1.03},
+                                      {Team::kYellow, 0.1463, 0.2519, -0.624, 2.974, -0.084, -0.11}};
+  const Aftermath o = Strike(w, robots, 1.0);
+  EXPECT_LT(o.deepest, CrashDepthLimit(profile)) << "shell inside shell, m";
+  EXPECT_LT(o.most_tilt, 10 * kDeg) << "most tilt, rad";
+  EXPECT_LT(o.fastest_roll, 5.0) << "rad/s about a horizontal axis";
 }
 
 // A robot at full speed (3 m/s) strikes another crossing at 1.5 m/s, from every side, at every
@@ -453,46 +454,14 @@ TEST_P(RobotCrash, StrikesFromEveryAngleLeaveBothOnTheirWheels) {
         const Vec3 closing = (vs - vc).normalized(), across(-closing.y(), closing.x(), 0);
         const Vec3 meet(0.5, 0.3, 0), struck0 = meet - 0.04 * vc;
         const Vec3 striker0 = meet - 0.04 * vs - 0.18 * closing + aside * across;
-        struct Moving {
-          Team team;
-          Vec3 at, v;
-          double yaw;
-        };
-        const Moving robots[2] = {{Team::kBlue, struck0, vc, b + 1.0}, {Team::kYellow, striker0, vs, a - 0.3 * striker}};
-        for (const Moving& m : robots) {
-          PositionEvent e;
-          e.target = Target::Robot({m.team, 0});
-          e.position = m.at;
-          e.yaw = m.yaw;
-          e.velocity = m.v;
-          w.world->events().Post(e);
-        }
-        w.world->ProcessEvents();
-        StateCheckOptions overlap;
-        overlap.finite = overlap.speed = overlap.carpet = overlap.walls = false;
-        overlap.limits.robot_penetration = 0.0;
-        const int every = std::max(1, static_cast<int>(std::lround(0.01 / w.dt)));
-        double tilt = 0, roll = 0;
-        for (int i = 0; i < static_cast<int>(std::lround(0.35 / w.dt)); ++i) {  // thrown robots lie on their sides by then
-          if (i % every == 0 && i * w.dt < 0.1) {
-            for (const Moving& m : robots) {
-              const double c = std::cos(m.yaw), s = std::sin(m.yaw);
-              w.world->events().Post(CommandEvent{
-                  {m.team, 0}, LocalVelocityCommand{c * m.v.x() + s * m.v.y(), -s * m.v.x() + c * m.v.y(), 0}, {}, {}});
-            }
-          }
-          w.world->Step();
-          for (const StateViolation& v : CheckState(*w.world, overlap)) {
-            if (v.other && v.other->kind == StateObject::Kind::kRobot) deepest = std::max(deepest, v.value);
-          }
-          for (const RobotState& r : w.world->GroundTruth().robots) {
-            tilt = std::max(tilt, std::acos(std::clamp((r.pose.orientation * Vec3::UnitZ()).z(), -1.0, 1.0)));
-            roll = std::max(roll, r.twist.angular.head<2>().norm());
-          }
-        }
+        const std::vector<Moving> robots = {
+            {Team::kBlue, struck0.x(), struck0.y(), b + 1.0, vc.x(), vc.y(), 0.0},
+            {Team::kYellow, striker0.x(), striker0.y(), a - 0.3 * striker, vs.x(), vs.y(), 0.0}};
+        const Aftermath o = Strike(w, robots, 0.35);  // thrown robots lie on their sides by then
         ++runs;
-        fastest_roll = std::max(fastest_roll, roll);
-        if (tilt > 10 * kDeg) {
+        fastest_roll = std::max(fastest_roll, o.fastest_roll);
+        deepest = std::max(deepest, o.deepest);
+        if (o.most_tilt > 10 * kDeg) {
           ++tipped;
           where += " " + std::to_string(striker * 45) + "°/" + std::to_string(crossing * 90) + "°/" + std::to_string(aside);
         }
