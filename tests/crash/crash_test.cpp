@@ -469,9 +469,9 @@ TEST_P(RobotCrash, StrikesFromEveryAngleLeaveBothOnTheirWheels) {
     }
   }
   EXPECT_EQ(tipped, 0) << "of " << runs << ", striker°/struck°/aside m:" << where;
-  // A crash pushes at the shells' centres of mass height, between their two contact levels: the
-  // robots rock (3.3-4.7 rad/s measured), not thrown (10-16 rad/s, and onto their sides at fast,
-  // while only one level of a just-touching pair had its contact).
+  // With both levels' contacts the pair pushes where the shells' faces stay together: the robots
+  // rock (3.3-4.7 rad/s measured), not thrown (10-16 rad/s, and onto their sides at fast, while
+  // only one level of a just-touching pair had its contact).
   EXPECT_LT(fastest_roll, 6.0) << "rad/s about a horizontal axis";
   // An off-centre strike spins the robots up to 12 rad/s: a flat front's corner then turns 5-6 mm
   // into the other shell within a step, which the contacts at the step's start do not see.

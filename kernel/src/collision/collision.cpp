@@ -719,12 +719,13 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double
     dContact c{};
     c.geom = cg;
     // A level of two shells still apart (CollideUprightPrisms writes its gap as a depth below
-    // zero) is speculative, as a swept contact: it holds once the gap has closed in the step.
+    // zero; SweepRobots' contacts come at depth 0 with their approach) is speculative, as a swept
+    // contact: it holds once the gap has closed in the step.
     double gap_speed = approach ? approach[i] : -1.0;
     if (cg.depth < 0.0) {
-      if (!approach && step_ <= 0) continue;  // no step to close it in
+      if (step_ <= 0) continue;  // no step to close it in
       c.geom.depth = 0.0;
-      if (!approach) gap_speed = -cg.depth / step_;
+      gap_speed = -cg.depth / step_;
     }
     int mode = dContactApprox1;
     c.surface.mu = surface.mu;

@@ -323,14 +323,15 @@ void NearLevel(const Standing& a, const AtHeight& b_at, Levels& levels) {
   auto& t = levels.touches;
   if ((t[0].spot_count > 0) == (t[1].spot_count > 0)) return;
   const std::size_t touching = t[0].spot_count > 0 ? 0 : 1, other = 1 - touching;
-  const double z = levels.heights[other];
-  const double depth = Overlap(a.At(z), b_at(z), t[touching].n);
+  const double z = levels.heights[other], z_touching = levels.heights[touching];
+  const Outline a_there = a.At(z);
+  const auto b_there = b_at(z);
+  const double depth = Overlap(a_there, b_there, t[touching].n);
   if (depth <= -kLevelMargin) return;
   t[other] = t[touching];
   t[other].depth = std::min(depth, 0.0);
   // The spots move with the shells' lean between the levels.
-  const V2 shift = 0.5 * (a.At(z).centre - a.At(levels.heights[touching]).centre) +
-                   0.5 * (b_at(z).centre - b_at(levels.heights[touching]).centre);
+  const V2 shift = 0.5 * (a_there.centre - a.At(z_touching).centre) + 0.5 * (b_there.centre - b_at(z_touching).centre);
   for (V2& spot : t[other].spots) spot += shift;
 }
 

@@ -314,6 +314,28 @@ TEST(UprightPrismWithBox, AShellPushedIntoAThinWallFromBehindIsPushedBackOut) {
   EXPECT_NEAR(c[0].pos[2], 0.08, 1e-9);
 }
 
+// A robot leaning into a wall as it drives into it touches at the top first: the bottom, a few
+// millimetres off, is written too with its gap (speculative), as two shells' levels are. With the
+// top contact alone the wall's push acted above the centre of mass only.
+TEST(UprightPrismWithBox, AShellLeaningIntoAWallGetsItsOtherLevelWithItsGap) {
+  const Vec3 wall(0.02, 1.2, 0.16);
+  const Pose wall_pose = Pose::FromYaw(Vec3(6.19, 0, 0.08), 0);
+  Pose leaning = Upright(6.2 + 0.09 + 0.001, 0, 0.5 * M_PI);  // the arc toward the wall, 1 mm off
+  leaning.orientation = Quat(Eigen::AngleAxisd(-0.05, Vec3::UnitY())) * leaning.orientation;  // top toward it
+  const double reach = kShell.half_height * std::cos(0.05) * std::tan(0.05);
+  dContactGeom c[4];
+  ASSERT_EQ(CollideUprightPrismWithBox(kShell, leaning, wall, wall_pose, 4, c), 2);
+  const dContactGeom& top = c[0].pos[2] > c[1].pos[2] ? c[0] : c[1];
+  const dContactGeom& bottom = c[0].pos[2] > c[1].pos[2] ? c[1] : c[0];
+  EXPECT_NEAR(top.depth, reach - 0.001, 1e-5);
+  EXPECT_NEAR(bottom.depth, -(reach + 0.001), 1e-5);
+  EXPECT_NEAR(bottom.normal[0], 1.0, 1e-9);
+  // Leaning 0.2 rad, the bottom is 1 cm and more off: the top alone.
+  leaning.orientation = Quat(Eigen::AngleAxisd(-0.2, Vec3::UnitY())) * Pose::FromYaw(Vec3::Zero(), 0.5 * M_PI).orientation;
+  ASSERT_EQ(CollideUprightPrismWithBox(kShell, leaning, wall, wall_pose, 4, c), 1);
+  EXPECT_GT(c[0].depth, 0.0);
+}
+
 TEST(UprightPrismWithBox, TiltedBoxesLeaningShellsAndWallTopsAreLeftToTheGeneralTest) {
   dContactGeom c[4];
   const Vec3 wall(0.02, 1.0, 0.1);
