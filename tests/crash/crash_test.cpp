@@ -478,6 +478,90 @@ TEST_P(RobotCrash, StrikesFromEveryAngleLeaveBothOnTheirWheels) {
   EXPECT_LT(deepest, 0.008) << "shell inside shell, m";
 }
 
+// A ball put 15 mm into the mouth of a robot driving at 2.8 m/s along the wall, 16 mm from it,
+// and sent at the robot (the fast soak's seed 1 at 3243.71 s on Div A, moved to Div B's wall).
+// Wedged between the wall and the dribbler, its contacts fired it out and spun the robot at
+// 13 rad/s onto its side; put where it is free instead, it leaves the robot on its wheels.
+TEST_P(RobotCrash, ABallPutIntoARobotsMouthAtTheWallLeavesItOnItsWheels) {
+  const auto& [profile, robot] = GetParam();
+  constexpr double kShift = 1.8;  // Div A's goal-line wall at x = -6.6, Div B's at -4.8
+  for (double speed : {0.0, 2.0, 6.5}) {
+    TwoRobots w(profile, robot, 1.0, 2.0);
+    const std::vector<Moving> robots = {{Team::kYellow, -6.4912 + kShift, 0.6218, -2.807, -2.195, 1.730, 1.56}};
+    PutDown(w, robots);
+    const Vec3 ball(-6.5761 + kShift, 0.6469, 0.0215), at(-6.4912 + kShift, 0.6218, 0.0);
+    PositionEvent e;
+    e.target = Target::Ball();
+    e.position = ball;
+    e.velocity = speed * Vec3(at.x() - ball.x(), at.y() - ball.y(), 0).normalized();
+    w.world->events().Post(e);
+    w.world->ProcessEvents();
+    // Where it went: out of the shell and the wall, within a few centimetres of where it was put.
+    const Vec3 placed = w.world->GroundTruth().ball.pose.position;
+    EXPECT_LT((placed - ball).norm(), 0.06) << speed << " m/s: moved " << (placed - ball).norm() << " m";
+    StateCheckOptions o;
+    o.finite = o.speed = o.carpet = o.tilt = false;
+    for (const StateViolation& v : CheckState(*w.world, o)) {
+      EXPECT_NE(v.object.kind, StateObject::Kind::kBall) << speed << " m/s: " << v.value << " m in, as put";
+    }
+    double most_tilt = 0;
+    const int every = std::max(1, static_cast<int>(std::lround(0.01 / w.dt)));
+    for (int i = 0; i < static_cast<int>(std::lround(0.5 / w.dt)); ++i) {
+      if (i % every == 0 && i * w.dt < 0.2) KeepMoving(w, robots);
+      w.world->Step();
+      for (const RobotState& r : w.world->GroundTruth().robots) {
+        most_tilt = std::max(most_tilt, std::acos(std::clamp((r.pose.orientation * Vec3::UnitZ()).z(), -1.0, 1.0)));
+      }
+    }
+    // Put as it came the ball tilted the wheel-body robot 26-32° at precise and 1.5-4.9° at fast
+    // (the soak's onto its side); put free, 0.4-1.2°, the robot's own strike on the wall.
+    EXPECT_LT(most_tilt, kRestingTilt) << speed << " m/s: most tilt, rad";
+  }
+}
+
+// Where a placed ball lands: as put when it only touches; at the nearest free spot when it
+// overlaps a robot's shell or a wall.
+Vec3 PutBall(TwoRobots& w, const Vec3& at) {
+  PositionEvent e;
+  e.target = Target::Ball();
+  e.position = at;
+  w.world->events().Post(e);
+  w.world->ProcessEvents();
+  return w.world->GroundTruth().ball.pose.position;
+}
+
+TEST(PlacedBall, TouchingARobotItStaysExactlyWherePut) {
+  TwoRobots w("fast", "ssl-omni-2026.yaml", 0.0, 2.0);  // blue at the origin facing +x
+  const Vec3 behind(-(0.09 + 0.0215), 0.0, 0.0215);     // against the round back
+  EXPECT_EQ(PutBall(w, behind), behind);
+  const Vec3 open(1.0, -1.0, 0.0215);
+  EXPECT_EQ(PutBall(w, open), open);
+}
+
+TEST(PlacedBall, InsideARobotsShellItGoesToTheShellsSurface) {
+  TwoRobots w("fast", "ssl-omni-2026.yaml", 0.0, 2.0);
+  for (double a : {M_PI, 0.5 * M_PI, -0.75 * M_PI}) {  // the round side and back
+    const Vec3 out(std::cos(a), std::sin(a), 0.0);
+    const Vec3 put = out * (0.09 + 0.0215 - 0.012) + Vec3(0, 0, 0.0215);  // 12 mm in
+    const Vec3 landed = PutBall(w, put);
+    const double from_centre = landed.head<2>().norm();
+    // Out along the way it went in, to within the search's ring spacing (2 mm), and free.
+    EXPECT_GT(from_centre, 0.09 + 0.0215 - 0.001) << a;
+    EXPECT_LT(from_centre, 0.09 + 0.0215 + 0.003) << a;
+    EXPECT_GT(landed.head<2>().normalized().dot(out.head<2>()), 0.99) << a;
+    EXPECT_EQ(landed.z(), put.z()) << a;
+  }
+}
+
+TEST(PlacedBall, InsideAWallItGoesToTheWallsFace) {
+  TwoRobots w("fast", "ssl-omni-2026.yaml", 0.0, 2.0);
+  // Div B's touch-line wall has its inner face at y = 3.3: the ball put 15 mm into it.
+  const Vec3 landed = PutBall(w, Vec3(1.0, 3.3 - 0.0215 + 0.015, 0.0215));
+  EXPECT_NEAR(landed.x(), 1.0, 1e-9);
+  EXPECT_LT(landed.y(), 3.3 - 0.0215 + 0.001);
+  EXPECT_GT(landed.y(), 3.3 - 0.0215 - 0.003);
+}
+
 INSTANTIATE_TEST_SUITE_P(BothProfilesBothDrives, RobotCrash,
                          ProfilesAndDrives(), ProfileAndDriveName);
 

@@ -833,4 +833,67 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double
   }
 }
 
+std::optional<Vec3> CollisionManager::FreeBallSpot(const BodyImpl& ball, const Vec3& wanted, double tolerance,
+                                                   double search, const Eigen::Vector2d& bounds) {
+  GeomImpl* sphere = nullptr;
+  graph_.Root().ForEachGeom([&](GeomImpl& g) {
+    if (g.body() == &ball && g.GetShape().kind == Shape::Kind::kSphere) sphere = &g;
+  });
+  if (!sphere) return wanted;
+  const double radius = sphere->GetShape().radius;
+  // Robots' shells and the field's static geometry, with bounds taken now (robots may have been
+  // put down this instant). A robot's parts are left out: a ball put in the mouth presses on
+  // the dribbler bar as a real one sprung onto it does, and stays there.
+  struct Obstacle {
+    GeomImpl* geom;
+    BoundingSphere bounds;
+    Vec3 centre;
+  };
+  std::vector<Obstacle> obstacles;
+  graph_.Root().ForEachGeom([&](GeomImpl& g) {
+    if (g.is_plane() || (g.body() && !g.prism()) || !MayCollide(*sphere, g)) return;
+    obstacles.push_back({&g, g.WorldBounds(), g.GetPose().position});
+  });
+  OdeGeom probe(dCreateSphere(nullptr, radius));
+  // The deepest overlap of the ball at `at`, m, and the way out of it (horizontal, unit; zero
+  // when the way out is straight up or down).
+  Eigen::Vector2d out = Eigen::Vector2d::Zero();
+  const auto deepest = [&](const Vec3& at) {
+    double depth = 0.0;
+    const BoundingSphere here{at, radius};
+    for (const Obstacle& o : obstacles) {
+      if (!here.Overlaps(o.bounds)) continue;
+      dContactGeom hit;
+      int n = 0;
+      if (o.geom->prism()) {
+        // A shell as the solid it is to every other contact (ODE's mesh test misses a ball inside).
+        n = CollideFlatFrontPrismWithSphere(*o.geom->prism(), o.geom->GetPose(), at, radius, &hit);
+      } else {
+        dGeomSetPosition(probe.get(), at.x(), at.y(), at.z());
+        n = dCollide(probe.get(), o.geom->id(), 1, &hit, sizeof hit);
+      }
+      if (n <= 0 || hit.depth <= depth) continue;
+      depth = hit.depth;
+      Eigen::Vector2d away(hit.normal[0], hit.normal[1]);
+      if (away.dot((at - o.centre).head<2>()) < 0) away = -away;  // from the obstacle toward the ball
+      out = away.norm() > 1e-9 ? Eigen::Vector2d(away.normalized()) : Eigen::Vector2d::Zero();
+    }
+    return depth;
+  };
+  if (deepest(wanted) <= tolerance) return wanted;
+  // Rings about the wanted spot, each tried from the way out of its deepest overlap first.
+  const double first = out.isZero() ? 0.0 : std::atan2(out.y(), out.x());
+  for (double ring = kFreeSpotStep; ring <= search + 1e-12; ring += kFreeSpotStep) {
+    const int n = std::clamp(static_cast<int>(std::ceil(2 * M_PI * ring / kFreeSpotStep)), 8, 64);
+    for (int k = 0; k < n; ++k) {
+      const int turn = (k + 1) / 2 * (k % 2 == 1 ? 1 : -1);  // 0, +1, -1, +2, -2, ...
+      const double a = first + 2 * M_PI * turn / n;
+      const Vec3 at = wanted + ring * Vec3(std::cos(a), std::sin(a), 0.0);
+      if (std::abs(at.x()) > bounds.x() || std::abs(at.y()) > bounds.y()) continue;
+      if (deepest(at) <= tolerance) return at;
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace ubersim::kernel

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -153,6 +154,15 @@ class CollisionManager {
   /// Every this many Collide() passes, the surfaces of pairs that have not touched for as many
   /// passes are dropped: the cache holds what touches lately, so memory stays flat all day.
   static constexpr std::uint64_t kSurfaceCacheSweepPasses = 1000;
+
+  /// Where the ball `ball` put at `wanted` overlaps no robot's shell and no static geometry
+  /// (walls, goals) by more than `tolerance`, m: `wanted` when it is free, else the nearest
+  /// free spot on the level through it (searched in rings of kFreeSpotStep out to `search`, m),
+  /// within `bounds` (the largest |x| and |y| its centre may have); none when there is none.
+  std::optional<Vec3> FreeBallSpot(const BodyImpl& ball, const Vec3& wanted, double tolerance, double search,
+                                   const Eigen::Vector2d& bounds);
+  /// The ring spacing of FreeBallSpot's search, m.
+  static constexpr double kFreeSpotStep = 0.002;
 
   /// True when the exclusion rules let a and b collide at all.
   static bool MayCollide(const GeomImpl& a, const GeomImpl& b);

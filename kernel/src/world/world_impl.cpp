@@ -17,6 +17,14 @@
 #include "world/robot.hpp"
 
 namespace ubersim::kernel {
+
+namespace {
+// A placed ball may overlap what it touches by this much, m (a contact's own surface layer and
+// some: a ball put against a robot's face stays exactly where put).
+constexpr double kPlacedBallOverlap = 0.001;
+// How far from where it was put a placed ball is searched a free spot, m.
+constexpr double kPlacedBallSearch = 0.3;
+}  // namespace
 namespace {
 
 using SteadyClock = std::chrono::steady_clock;
@@ -450,7 +458,19 @@ void WorldImpl::Apply(const PositionEvent& e) {
     Pose p = ball_->GetPose();
     if (e.position) {
       p.position = *e.position;
-      if (p.position.z() < model_.ball->radius) p.position.z() = model_.ball->radius;
+      const double radius = model_.ball->radius;
+      if (p.position.z() < radius) p.position.z() = radius;
+      // A ball put into a robot or a wall goes to the nearest spot where it is free: deep inside,
+      // its contacts would fire it out and strike the robot as hard (a ball put into a robot's
+      // mouth at the wall spun the robot at 13 rad/s onto its side). A touch is left as put.
+      const Eigen::Vector2d bounds(0.5 * field_geometry_.carpet_length - radius,
+                                   0.5 * field_geometry_.carpet_width - radius);
+      if (const auto free = collision_->FreeBallSpot(*ball_, p.position, kPlacedBallOverlap, kPlacedBallSearch, bounds)) {
+        p.position = *free;
+      } else {
+        log_.Warning("ball put where it overlaps a robot or a wall, with no free spot within " +
+                     std::to_string(kPlacedBallSearch) + " m: left there");
+      }
     }
     ball_->SetPose(p);
     Twist t = ball_->GetTwist();

@@ -40,6 +40,13 @@ namespace {
 
 using ubersim::Vec3;
 
+// At most this many wheels (the schema's maxItems): the per-step vectors and matrices live on the
+// stack at this capacity, no allocation per step.
+constexpr int kMaxWheels = 8;
+using WheelSpeeds = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxWheels, 1>;          // one per wheel
+using VelocityToWheels = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, kMaxWheels, 3>;     // wheels × 3
+using WheelsToVelocity = Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxWheels>;     // 3 × wheels
+
 struct Wheel {
   Vec3 centre;        // wheel centre in the chassis frame (origin at the centre of mass), m
   Vec3 tangent;       // rolling direction in the robot frame (counter-clockwise)
@@ -104,6 +111,10 @@ class OmniForceDrive final : public ubersim::Drive {
     const double chassis_z = chassis.GetPose().position.z();
     rest_height_ = chassis_z - kSettle;
     const ubersim::ParamView list = p["wheels"];
+    if (list.Size() > static_cast<std::size_t>(kMaxWheels)) {
+      throw ubersim::PluginError("omni_force takes at most " + std::to_string(kMaxWheels) + " wheels, this robot has " +
+                                 std::to_string(list.Size()));
+    }
     wheels_.resize(list.Size());
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
       Wheel& w = wheels_[i];
@@ -117,8 +128,9 @@ class OmniForceDrive final : public ubersim::Drive {
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
       m.row(static_cast<Eigen::Index>(i)) << wheels_[i].tangent.x(), wheels_[i].tangent.y(), distance_;
     }
-    geometry_ = m / wheel_radius_;
-    inverse_ = geometry_.completeOrthogonalDecomposition().pseudoInverse();
+    const Eigen::MatrixXd geometry = m / wheel_radius_;
+    geometry_ = geometry;
+    inverse_ = geometry.completeOrthogonalDecomposition().pseudoInverse();
     wheel_targets_.setZero(static_cast<Eigen::Index>(wheels_.size()));
     // The wheels' yaw servo gain per step: their shares m/n at wheel_distance d over the
     // chassis' moment of inertia, a solid cylinder's m·R²/2, is 2·d²/R². At 2 or more each step
@@ -142,17 +154,20 @@ class OmniForceDrive final : public ubersim::Drive {
   // What the encoders would read: each wheel turns with its contact point's speed along the
   // rolling direction (a wheel with no inertia never slips against its own contact).
   ubersim::DriveFeedback Feedback() const override {
-    ubersim::DriveFeedback f;
     const ubersim::Body& chassis = ctx_->Chassis();
     const ubersim::Pose pose = chassis.GetPose();
+    const ubersim::Twist twist = chassis.GetTwist();
     const Eigen::Matrix3d rotation = pose.orientation.toRotationMatrix();
-    f.wheel_speeds.reserve(wheels_.size());
-    for (const Wheel& w : wheels_) {
-      const Frame fr = WheelFrame(pose.position, rotation, w);
-      f.wheel_speeds.push_back(chassis.PointVelocity(fr.contact).dot(fr.rolling) / wheel_radius_);
+    WheelSpeeds speeds(static_cast<Eigen::Index>(wheels_.size()));
+    for (std::size_t i = 0; i < wheels_.size(); ++i) {
+      const Frame fr = WheelFrame(pose.position, rotation, wheels_[i]);
+      // The contact point's velocity: the chassis' origin is its centre of mass.
+      const Vec3 at = twist.linear + twist.angular.cross(fr.contact - pose.position);
+      speeds(static_cast<Eigen::Index>(i)) = at.dot(fr.rolling) / wheel_radius_;
     }
-    const Eigen::Vector3d v = inverse_ * Eigen::Map<const Eigen::VectorXd>(  // forward, left, angular
-                                             f.wheel_speeds.data(), static_cast<Eigen::Index>(f.wheel_speeds.size()));
+    ubersim::DriveFeedback f;
+    f.wheel_speeds.assign(speeds.data(), speeds.data() + speeds.size());
+    const Eigen::Vector3d v = inverse_ * speeds;  // forward, left, angular
     f.local_velocity.linear = Vec3(v.x(), v.y(), 0.0);
     f.local_velocity.angular = Vec3(0.0, 0.0, v.z());
     return f;
@@ -210,13 +225,13 @@ class OmniForceDrive final : public ubersim::Drive {
   }
 
   void PreStep(const ubersim::StepInfo& step) override {
-    Eigen::VectorXd& targets = wheel_targets_;  // wheel speeds, rad/s
+    WheelSpeeds& targets = wheel_targets_;  // wheel speeds, rad/s
     const bool fresh = watchdog_.Fresh(ctx_->SimTime());
     const auto* direct = fresh ? std::get_if<ubersim::WheelSpeedCommand>(&command_) : nullptr;
     if (direct) {
       // Direct wheel speeds bypass the velocity loop, as on the real robots.
-      const Eigen::Map<const Eigen::VectorXd> speeds(direct->wheel_speeds.data(),
-                                                     static_cast<Eigen::Index>(direct->wheel_speeds.size()));
+      const Eigen::Map<const WheelSpeeds> speeds(direct->wheel_speeds.data(),
+                                                 static_cast<Eigen::Index>(direct->wheel_speeds.size()));
       targets = speeds.cwiseMax(-max_wheel_speed_).cwiseMin(max_wheel_speed_);
       const Eigen::Vector3d v = inverse_ * speeds;
       servo_.Set({Eigen::Vector2d(v.x(), v.y()), v.z()});
@@ -276,7 +291,7 @@ class OmniForceDrive final : public ubersim::Drive {
   // shares act at wheel_distance on a chassis with less moment of inertia than they would have
   // there, so it overshoots by yaw_gain_ - 1 of the error each step (0.54 on the modern robot)
   // and settles in a few steps (see Configure).
-  void PushWheels(const Eigen::VectorXd& targets, double dt) {
+  void PushWheels(const WheelSpeeds& targets, double dt) {
     ubersim::Body& chassis = ctx_->Chassis();
     const ubersim::Pose pose = chassis.GetPose();
     if (!Standing(pose.position)) return;  // in the air: no grip, no support
@@ -316,9 +331,9 @@ class OmniForceDrive final : public ubersim::Drive {
 
   ubersim::RobotContext* ctx_ = nullptr;
   std::vector<Wheel> wheels_;  // sized once in Configure: the contact handlers hold indices
-  Eigen::MatrixXd geometry_;   // wheel speeds (rad/s) = geometry_ · (forward, left, angular)
-  Eigen::MatrixXd inverse_;    // (forward, left, angular) = inverse_ · wheel speeds
-  Eigen::VectorXd wheel_targets_;  // this step's wheel speeds, rad/s (sized once: no allocation per step)
+  VelocityToWheels geometry_;  // wheel speeds (rad/s) = geometry_ · (forward, left, angular)
+  WheelsToVelocity inverse_;   // (forward, left, angular) = inverse_ · wheel speeds
+  WheelSpeeds wheel_targets_;  // this step's wheel speeds, rad/s
   double wheel_radius_ = 0.029;
   double distance_ = 0.08;
   double max_torque_ = 0.5;
