@@ -15,7 +15,7 @@ namespace ubersim::kernel {
 namespace {
 
 Broadphase FromIndex(int64_t i) {
-  return i == 0 ? Broadphase::kSceneGraph : (i == 1 ? Broadphase::kHash : Broadphase::kSweepAndPrune);
+  return i == 0 ? Broadphase::kSceneGraph : (i == 1 ? Broadphase::kHash : (i == 2 ? Broadphase::kSweepAndPrune : Broadphase::kField));
 }
 
 // One collision pass (broadphase + narrow phase + contact joints) on an SSL scene.
@@ -38,7 +38,7 @@ void BM_SslScene(benchmark::State& state) {
 }
 BENCHMARK(BM_SslScene)
     ->ArgNames({"broadphase", "robots_per_team"})
-    ->ArgsProduct({{0, 1, 2}, {5, 6, 11}})
+    ->ArgsProduct({{0, 1, 2, 3}, {5, 6, 11}})
     ->Unit(benchmark::kMicrosecond);
 
 // Candidate pairs only on the random nested scenes of the exactness test.
@@ -63,7 +63,7 @@ void BM_RandomScene(benchmark::State& state) {
 }
 BENCHMARK(BM_RandomScene)
     ->ArgNames({"broadphase", "top_nodes"})
-    ->ArgsProduct({{0, 1, 2}, {6, 24}})
+    ->ArgsProduct({{0, 1, 2, 3}, {6, 24}})
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

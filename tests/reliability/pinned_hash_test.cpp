@@ -40,16 +40,16 @@ struct Pinned {
 // And again when two shells touching at one level got the other level's contact too, with its
 // gap (NearLevel in upright_prism.cpp).
 constexpr Pinned kPinned[] = {
-    {"ssl-2003", 0x3d1541a79c2301f1ULL, 0x3f824f09ccd91bc7ULL},
-    {"div-b", 0xa79f3e9f68c051c7ULL, 0x09073091deb847ceULL},
-    {"div-a", 0x62e909973a5a41a2ULL, 0x04dc293340077ccdULL},
+    {"ssl-2003", 0xb3099cb62c6a24e3ULL, 0x6773b1f1361b5c18ULL},
+    {"div-b", 0x12755e3066faced8ULL, 0xecc5ebd7864191cfULL},
+    {"div-a", 0x30a065df920dec51ULL, 0xefa131387ac11fd1ULL},
 };
 
 // The suite's sanitizer pass (clang, AddressSanitizer) steps div-b to other states than gcc's
 // regular build since the wheels became contacts (129c6f7; ssl-2003 and div-a agree to the bit).
 // The cause is not found yet: IEEE arithmetic without contraction should agree. Until it is,
 // that build pins its own div-b values, as repeatable from run to run as gcc's.
-constexpr Pinned kSanitizerDivB = {"div-b", 0xe9d0812bd238f7adULL, 0xabc12b2885725b65ULL};
+constexpr Pinned kSanitizerDivB = {"div-b", 0xf441c359adcf7375ULL, 0xb3e231064d8acfccULL};
 
 // The world's name in gtest's output, not the struct's bytes.
 void PrintTo(const Pinned& p, std::ostream* out) { *out << p.world; }

@@ -226,7 +226,7 @@ TEST_P(Broadphase, RestoredScrumIsBitIdentical) {
   EXPECT_EQ(Scrum(world, 1500), original);
 }
 
-INSTANTIATE_TEST_SUITE_P(Snapshot, Broadphase, ::testing::Values("sap", "hash", "scene_graph"));
+INSTANTIATE_TEST_SUITE_P(Snapshot, Broadphase, ::testing::Values("sap", "hash", "scene_graph", "field"));
 
 TEST(Snapshot, ASecondRestoreOfTheSameSnapshotGoesTheSameWay) {
   Worlds s;

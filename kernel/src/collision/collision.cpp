@@ -176,7 +176,8 @@ Broadphase ParseBroadphase(const std::string& name) {
   if (name == "scene_graph") return Broadphase::kSceneGraph;
   if (name == "hash") return Broadphase::kHash;
   if (name == "sap") return Broadphase::kSweepAndPrune;
-  throw std::invalid_argument("unknown broadphase '" + name + "' (scene_graph, hash, sap)");
+  if (name == "field") return Broadphase::kField;
+  throw std::invalid_argument("unknown broadphase '" + name + "' (scene_graph, hash, sap, field)");
 }
 
 const char* ToString(Broadphase b) {
@@ -184,6 +185,7 @@ const char* ToString(Broadphase b) {
     case Broadphase::kSceneGraph: return "scene_graph";
     case Broadphase::kHash: return "hash";
     case Broadphase::kSweepAndPrune: return "sap";
+    case Broadphase::kField: return "field";
   }
   return "unknown";
 }
@@ -227,7 +229,7 @@ CollisionManager::CollisionManager(SceneGraph& graph, Broadphase broadphase, int
       max_contacts_(std::clamp(max_contacts, 1, 64)),
       contacts_(dJointGroupCreate(0)),
       scratch_(static_cast<std::size_t>(kContactCandidates)) {
-  graph_.SetGeomListener([this](GeomImpl& g) { File(g); }, nullptr);
+  graph_.SetGeomListener([this](GeomImpl& g) { File(g); }, [this](GeomImpl&) { field_grouped_ = false; });
   SetBroadphase(broadphase);
 }
 
@@ -245,6 +247,8 @@ void CollisionManager::Refile() {
   balls_.clear();
   sweep_targets_.clear();
   sweep_shells_.clear();
+  sweep_shell_reach_.clear();
+  sweep_target_reach_.clear();
   hulls_found_ = false;
   hulls_.clear();
   hull_touching_.clear();
@@ -263,6 +267,7 @@ void CollisionManager::Unfile() {
 void CollisionManager::SetBroadphase(Broadphase broadphase) {
   Unfile();
   broadphase_ = broadphase;
+  field_grouped_ = false;
   if (broadphase == Broadphase::kHash) {
     space_.reset(dHashSpaceCreate(nullptr));
     // Cells from 2^-6 m (about a ball) to 2^4 m (a wall).
@@ -284,6 +289,7 @@ void CollisionManager::SetBroadphase(Broadphase broadphase) {
 }
 
 void CollisionManager::File(GeomImpl& g) {
+  field_grouped_ = false;
   if (!space_) return;
   if (g.is_plane()) planes_.push_back(&g);
   if (g.scope() == ContactScope::kPlanesOnly && !g.is_plane()) {
@@ -387,8 +393,181 @@ struct SphereTree {
 
 }  // namespace
 
+namespace {
+
+// A geometry's box in its own frame: centre and half extents, m.
+void LocalBox(const Shape& shape, Vec3& centre, Vec3& half) {
+  centre = Vec3::Zero();
+  switch (shape.kind) {
+    case Shape::Kind::kSphere: half = Vec3::Constant(shape.radius); return;
+    case Shape::Kind::kBox: half = 0.5 * shape.size; return;
+    case Shape::Kind::kCylinder: half = Vec3(shape.radius, shape.radius, 0.5 * shape.length); return;
+    case Shape::Kind::kCapsule: half = Vec3(shape.radius, shape.radius, 0.5 * shape.length + shape.radius); return;
+    case Shape::Kind::kConvex:
+    case Shape::Kind::kTriangleMesh: {
+      Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+      for (const Vec3& v : shape.vertices) {
+        lo = lo.cwiseMin(v);
+        hi = hi.cwiseMax(v);
+      }
+      if (shape.vertices.empty()) lo = hi = Vec3::Zero();
+      centre = 0.5 * (lo + hi);
+      half = 0.5 * (hi - lo);
+      return;
+    }
+    case Shape::Kind::kPlane: break;
+  }
+  half = Vec3::Constant(std::numeric_limits<double>::infinity());
+}
+
+// Whether the geometry lies wholly on `plane`'s free side: its box in its body's frame, turned
+// with the body, reaches no lower along the normal than the plane. The same test as
+// BoxAbovePlane's, on a box a little larger than ODE's: it needs no world pose of the geometry.
+bool BodyBoxAbovePlane(const dReal* p, const dReal* r, const Vec3& centre, const Vec3& half, const Vec3& normal,
+                       double offset) {
+  double along = normal.x() * p[0] + normal.y() * p[1] + normal.z() * p[2];
+  for (int k = 0; k < 3; ++k) {
+    // Column k of the body's rotation (ODE's 3×4, row-major): the body's axis k in the world.
+    const double axis = normal.x() * r[k] + normal.y() * r[4 + k] + normal.z() * r[8 + k];
+    along += axis * centre[k] - std::abs(axis) * half[k];
+  }
+  return along > offset;
+}
+
+}  // namespace
+
+CollisionManager::FieldGeom CollisionManager::BoxInBodyFrame(GeomImpl& g) {
+  FieldGeom f{&g, dBodyGetPosition(g.body()->id()), dBodyGetRotation(g.body()->id()), Vec3::Zero(), Vec3::Zero()};
+  Vec3 centre, half;
+  LocalBox(g.GetShape(), centre, half);
+  // The geometry's pose on its body (none: the body's own).
+  const dReal* op = dGeomGetOffsetPosition(g.id());
+  const dReal* orot = dGeomGetOffsetRotation(g.id());
+  Eigen::Matrix3d rot;
+  rot << orot[0], orot[1], orot[2], orot[4], orot[5], orot[6], orot[8], orot[9], orot[10];
+  f.centre = Vec3(op[0], op[1], op[2]) + rot * centre;
+  f.half = rot.cwiseAbs() * half;
+  return f;
+}
+
+void CollisionManager::GroupForField() {
+  field_groups_.clear();
+  field_statics_.clear();
+  field_planes_.clear();
+  std::vector<GeomImpl*> geoms;
+  graph_.Root().ForEachGeom([&geoms](GeomImpl& g) { geoms.push_back(&g); });
+  // In creation order: a world built anew from the same robots in the same order groups alike.
+  std::sort(geoms.begin(), geoms.end(), [](const GeomImpl* a, const GeomImpl* b) { return a->serial() < b->serial(); });
+  std::map<const void*, std::size_t> group_of;  // robot node or loose body -> group
+  for (GeomImpl* g : geoms) {
+    if (g->is_plane()) {
+      field_planes_.push_back(g);
+      continue;
+    }
+    if (!g->body()) {
+      StaticGeom s{g, {}};
+      dGeomGetAABB(g->id(), s.box);
+      field_statics_.push_back(s);
+      continue;
+    }
+    const void* key = g->robot() ? static_cast<const void*>(g->robot()) : static_cast<const void*>(g->body());
+    const auto [it, added] = group_of.emplace(key, field_groups_.size());
+    if (added) field_groups_.emplace_back();
+    FieldGroup& group = field_groups_[it->second];
+    group.geoms.push_back(g);
+    group.boxed.push_back(BoxInBodyFrame(*g));
+    // How far this geometry reaches from its body's origin; a little more, for the rounding.
+    const dBodyID body = g->body()->id();
+    const BoundingSphere b = g->WorldBounds();
+    const double reach = (b.center - ToVec3(dBodyGetPosition(body))).norm() + b.radius + 1e-6;
+    auto known = std::find_if(group.bodies.begin(), group.bodies.end(), [body](const auto& e) { return e.first == body; });
+    if (known == group.bodies.end()) {
+      group.bodies.emplace_back(body, reach);
+    } else {
+      known->second = std::max(known->second, reach);
+    }
+  }
+  field_order_.resize(field_groups_.size());
+  for (std::size_t i = 0; i < field_order_.size(); ++i) field_order_[i] = i;
+  field_grouped_ = true;
+}
+
+template <typename F>
+void CollisionManager::ForEachFieldPair(F& f) {
+  if (!field_grouped_) GroupForField();
+  for (FieldGroup& group : field_groups_) {
+    group.active = std::any_of(group.geoms.begin(), group.geoms.end(), [](const GeomImpl* g) { return g->collides(); });
+    if (!group.active) continue;
+    for (int k = 0; k < 3; ++k) {
+      group.lo[k] = std::numeric_limits<double>::infinity();
+      group.hi[k] = -std::numeric_limits<double>::infinity();
+    }
+    for (const auto& [body, reach] : group.bodies) {
+      const dReal* p = dBodyGetPosition(body);
+      for (int k = 0; k < 3; ++k) {
+        group.lo[k] = std::min(group.lo[k], p[k] - reach);
+        group.hi[k] = std::max(group.hi[k], p[k] + reach);
+      }
+    }
+  }
+  // Sorted by the boxes' low x, ties by index: one order for one state, whatever the order was
+  // the step before (a restored world pairs as the original). Nearly sorted already: insertion.
+  const auto before = [this](std::size_t a, std::size_t b) {
+    const double xa = field_groups_[a].lo[0], xb = field_groups_[b].lo[0];
+    return xa < xb || (xa == xb && a < b);
+  };
+  for (std::size_t i = 1; i < field_order_.size(); ++i) {
+    const std::size_t moving = field_order_[i];
+    std::size_t j = i;
+    for (; j > 0 && before(moving, field_order_[j - 1]); --j) field_order_[j] = field_order_[j - 1];
+    field_order_[j] = moving;
+  }
+  const auto pair_up = [&f](GeomImpl& a, GeomImpl& b) {
+    if (MayCollide(a, b) && AabbsOverlap(a.id(), b.id())) f(a, b);
+  };
+  for (std::size_t i = 0; i < field_order_.size(); ++i) {
+    FieldGroup& a = field_groups_[field_order_[i]];
+    if (!a.active) continue;
+    for (std::size_t j = i + 1; j < field_order_.size(); ++j) {
+      FieldGroup& b = field_groups_[field_order_[j]];
+      if (b.lo[0] > a.hi[0]) break;  // every later box starts farther along x
+      if (!b.active || b.lo[1] > a.hi[1] || a.lo[1] > b.hi[1] || b.lo[2] > a.hi[2] || a.lo[2] > b.hi[2]) continue;
+      for (GeomImpl* ga : a.geoms) {
+        for (GeomImpl* gb : b.geoms) pair_up(*ga, *gb);
+      }
+    }
+  }
+  for (const std::size_t index : field_order_) {
+    FieldGroup& group = field_groups_[index];
+    if (!group.active) continue;
+    for (StaticGeom& s : field_statics_) {
+      const dReal* box = s.box;
+      if (box[0] > group.hi[0] || group.lo[0] > box[1] || box[2] > group.hi[1] || group.lo[1] > box[3] ||
+          box[4] > group.hi[2] || group.lo[2] > box[5]) {
+        continue;
+      }
+      for (GeomImpl* g : group.geoms) pair_up(*g, *s.geom);
+    }
+    // A plane's box is infinite: every geometry meets it in the narrow phase (which drops what
+    // lies wholly on its free side).
+    for (GeomImpl* plane : field_planes_) {
+      dVector4 ps;
+      dGeomPlaneGetParams(plane->id(), ps);
+      const Vec3 normal(ps[0], ps[1], ps[2]);
+      for (const FieldGeom& b : group.boxed) {
+        if (BodyBoxAbovePlane(b.position, b.rotation, b.centre, b.half, normal, ps[3])) continue;
+        if (MayCollide(*b.geom, *plane)) f(*b.geom, *plane);
+      }
+    }
+  }
+}
+
 template <typename F>
 void CollisionManager::ForEachPair(F& f) {
+  if (broadphase_ == Broadphase::kField) {
+    ForEachFieldPair(f);
+    return;
+  }
   if (broadphase_ == Broadphase::kSceneGraph) {
     graph_.UpdateBounds();
     SphereTree<F>{f, stats_.sphere_tests}.WithinSubtree(graph_.Root());
@@ -511,14 +690,28 @@ bool SweepBallAgainstShell(const FlatFrontPrism& shell, const Pose& pose, const 
 
 }  // namespace
 
+namespace {
+
+// How far a geometry on a body reaches from the body's origin, m (a sphere about it that holds
+// the geometry however the body turns).
+double ReachFromBody(const GeomImpl& g) {
+  if (!g.body()) return 0.0;
+  const dReal* offset = dGeomGetOffsetPosition(g.id());
+  return std::sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2]) + g.GetShape().BoundingRadius();
+}
+
+}  // namespace
+
 void CollisionManager::SweepFastBalls() {
   if (!balls_found_) {  // the scene is complete by the first step; a reset builds a new manager
     graph_.Root().ForEachGeom([&](GeomImpl& g) {
       if (g.is_ball() && g.body()) balls_.push_back(&g);
       if (g.prism() && g.body()) {
         sweep_shells_.push_back(&g);
+        sweep_shell_reach_.push_back(ReachFromBody(g));
       } else if (!g.is_plane()) {
         sweep_targets_.push_back(&g);
+        sweep_target_reach_.push_back(ReachFromBody(g));
       }
     });
     balls_found_ = true;
@@ -530,10 +723,14 @@ void CollisionManager::SweepFastBalls() {
     const Vec3 from = ball->GetPose().position;
     // A robot's shell by the ball's speed relative to it: a robot driving at 1.4 m/s into a
     // resting ball moved 7 mm a step at 5 ms, and had the ball 11 mm inside its shell.
-    for (GeomImpl* target : sweep_shells_) {
-      GeomImpl& shell = *target;
+    for (std::size_t k = 0; k < sweep_shells_.size(); ++k) {
+      GeomImpl& shell = *sweep_shells_[k];
       if (!MayCollide(*ball, shell)) continue;
       const Vec3 relative = v - shell.body()->GetTwist().linear;
+      // Out of reach of the ball's path however the shell is turned: its pose is not needed.
+      const dReal* at = dBodyGetPosition(shell.body()->id());
+      const double bound = relative.norm() * swept_ball_step_ + radius + sweep_shell_reach_[k];
+      if ((from - Vec3(at[0], at[1], at[2])).squaredNorm() > bound * bound) continue;
       SweepBallAt(*ball, shell, from, relative, radius);
     }
     // Everything else by the ball's own speed. Slower than half a radius per step the ordinary
@@ -542,9 +739,14 @@ void CollisionManager::SweepFastBalls() {
     const double reach = v.norm() * swept_ball_step_;
     if (reach <= 0.1 * radius) continue;
     const bool slow = reach <= 0.5 * radius;
-    for (GeomImpl* target : sweep_targets_) {
-      GeomImpl& other = *target;
+    for (std::size_t k = 0; k < sweep_targets_.size(); ++k) {
+      GeomImpl& other = *sweep_targets_[k];
       if (&other == ball || (slow && !other.body()) || !MayCollide(*ball, other)) continue;
+      if (other.body()) {  // a robot's part: out of reach by its body's position, as the shells
+        const dReal* at = dBodyGetPosition(other.body()->id());
+        const double bound = reach + radius + sweep_target_reach_[k];
+        if ((from - Vec3(at[0], at[1], at[2])).squaredNorm() > bound * bound) continue;
+      }
       SweepBallAt(*ball, other, from, v, radius);
     }
   }

@@ -23,9 +23,10 @@ enum class Broadphase {
   kSceneGraph,     ///< hierarchical bounding spheres over the scene graph (the paper's method)
   kHash,           ///< ODE's multi-resolution hash space
   kSweepAndPrune,  ///< ODE's sweep-and-prune space
+  kField,          ///< the kernel's own for a field: each robot (each loose body) as one box swept along x, against the static field
 };
 
-/// Parses "scene_graph", "hash" or "sap"; throws std::invalid_argument otherwise.
+/// Parses "scene_graph", "hash", "sap" or "field"; throws std::invalid_argument otherwise.
 Broadphase ParseBroadphase(const std::string& name);
 
 /// How many contact points ODE may report for one pair before they are thinned to the world's
@@ -187,6 +188,11 @@ class CollisionManager {
   void ForEachPair(F& f);
   // Files a geometry: into the ODE space, or, when it touches planes only, beside it.
   void File(GeomImpl& g);
+  // The field broadphase's pairs (Broadphase::kField); its groups are made anew first when
+  // geometries came or went.
+  template <typename F>
+  void ForEachFieldPair(F& f);
+  void GroupForField();
   // Takes every geometry out of the ODE spaces and drops the spaces.
   void Unfile();
   // The resolved surface of two touching geometries, cached per pair while neither material
@@ -204,6 +210,33 @@ class CollisionManager {
     }
   };
 
+  // The field broadphase's moving groups: a robot's geometries, or a loose body's. Each step a
+  // group's box is the union of its bodies' positions grown by how far each body's geometries
+  // reach from it (rigid: measured once, when grouped).
+  struct FieldGeom {
+    GeomImpl* geom;
+    const dReal* position;  // its body's (ODE's own arrays: they live as long as the body)
+    const dReal* rotation;
+    Vec3 centre, half;      // its box in its body's frame, m: a plane needs no world box of it
+  };
+  struct FieldGroup {
+    std::vector<GeomImpl*> geoms;
+    std::vector<FieldGeom> boxed;                     // the same geometries with their boxes
+    std::vector<std::pair<dBodyID, double>> bodies;  // body, reach (m)
+    double lo[3], hi[3];                              // this step's box
+    bool active = false;                              // any geometry collides
+  };
+  struct StaticGeom {
+    GeomImpl* geom;
+    dReal box[6];
+  };
+  static FieldGeom BoxInBodyFrame(GeomImpl& g);
+  std::vector<FieldGroup> field_groups_;
+  std::vector<std::size_t> field_order_;     // field_groups_ by the box's low x (then index)
+  std::vector<StaticGeom> field_statics_;    // the field's fixed geometries but planes
+  std::vector<GeomImpl*> field_planes_;
+  bool field_grouped_ = false;
+
   SceneGraph& graph_;
   Broadphase broadphase_;
   int max_contacts_;
@@ -218,6 +251,8 @@ class CollisionManager {
   std::vector<GeomImpl*> balls_;  // the balls, found at the first swept test
   std::vector<GeomImpl*> sweep_targets_;  // what a swept ball may reach: every geometry but planes and shells
   std::vector<GeomImpl*> sweep_shells_;   // robots' shells, swept by the ball's speed relative to them
+  std::vector<double> sweep_shell_reach_;  // how far each shell reaches from its body's origin, m
+  std::vector<double> sweep_target_reach_; // the same for each target (0 for the static ones)
   bool balls_found_ = false;
   double swept_robot_step_ = 0.0;
   double robot_contact_erp_ = -1.0;

@@ -168,7 +168,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
       if (IsLimb(i)) held_.push_back(b);  // a limb has a joint: never lone
     }
   }
-  if (solved > 0 && !lone_.empty()) {
+  if (move_order_matters_ && solved > 0 && !lone_.empty()) {
     // QuickStep would have moved the lone bodies between its other islands: the broadphase
     // lists the geometries in the order they first moved, and that order decides which contact
     // comes first. Touching every body of the pass in QuickStep's order first keeps those lists

@@ -40,6 +40,10 @@ class IslandStepper {
   /// QuickStep iterations for islands holding a ball, and for every other island (Step sets the
   /// world's count before each QuickStep).
   void SetIterations(int ball_islands, int other_islands);
+  /// Whether the broadphase pairs geometries in the order they were told they moved (ODE's
+  /// spaces do; the kernel's field and scene-graph broadphases sort by their own order). When
+  /// it does not, lone bodies are stepped without first replaying QuickStep's order of telling.
+  void SetMoveOrderMatters(bool matters) { move_order_matters_ = matters; }
 
   /// One physics step of `world` (whose every body is in `bodies`) by `dt` seconds; `balls` are
   /// the balls' bodies. Bodies disabled before the step stay disabled. Lone bodies are stepped
@@ -65,6 +69,7 @@ class IslandStepper {
   // Collects into ball_islands_ every body linked to a ball through enabled joints (contacts
   // included), as QuickStep's own island search does.
   void FindBallIslands(const std::vector<dBodyID>& balls);
+  bool move_order_matters_ = true;
   bool InBallIslands(dBodyID b) const;
   // With demands: gives every body of `bodies` its pass (group_) and each pass its count
   // (pass_iterations_), the highest count first.

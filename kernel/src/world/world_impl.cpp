@@ -206,6 +206,8 @@ void WorldImpl::Build() {
   body_ids_for_ = 0;
   collision_ = std::make_unique<CollisionManager>(*scene_, ParseBroadphase(ph.broadphase),
                                                   ph.max_contacts);
+  const Broadphase broadphase = collision_->broadphase();
+  islands_.SetMoveOrderMatters(broadphase == Broadphase::kSweepAndPrune || broadphase == Broadphase::kHash);
   for (const MaterialPair& p : model_.material_pairs) {
     collision_->materials().SetPair(p.a, p.b, p.surface);
   }

@@ -88,7 +88,7 @@ TEST_P(CollisionAgainstBruteForce, RandomNestedScenesGiveExactlyTheBruteForcePai
 }
 
 INSTANTIATE_TEST_SUITE_P(ExactBroadphases, CollisionAgainstBruteForce,
-                         ::testing::Values(Broadphase::kSceneGraph, Broadphase::kSweepAndPrune),
+                         ::testing::Values(Broadphase::kSceneGraph, Broadphase::kSweepAndPrune, Broadphase::kField),
                          [](const auto& info) { return std::string(ToString(info.param)); });
 
 // ODE 0.16.2's hash space misses pairs whose boxes straddle a cell boundary at 0 (see
@@ -393,7 +393,7 @@ std::set<std::string> TouchedBy(ContactScope scope, Broadphase broadphase) {
 }
 
 TEST(CollisionManager, ContactScopesDropPairsBeforeTheNarrowPhase) {
-  for (Broadphase bp : {Broadphase::kSceneGraph, Broadphase::kSweepAndPrune}) {
+  for (Broadphase bp : {Broadphase::kSceneGraph, Broadphase::kSweepAndPrune, Broadphase::kField}) {
     EXPECT_EQ(TouchedBy(ContactScope::kAll, bp), (std::set<std::string>{"carpet", "box"})) << ToString(bp);
     EXPECT_EQ(TouchedBy(ContactScope::kPlanesOnly, bp), std::set<std::string>{"carpet"}) << ToString(bp);
     EXPECT_EQ(TouchedBy(ContactScope::kNoPlanes, bp), std::set<std::string>{"box"}) << ToString(bp);
@@ -467,7 +467,7 @@ double BoxSpeedOnConveyor(double belt_speed, Broadphase broadphase) {
 }
 
 TEST(CollisionManager, AMovingSurfaceDragsWhatRestsOnIt) {
-  for (Broadphase bp : {Broadphase::kSceneGraph, Broadphase::kSweepAndPrune}) {
+  for (Broadphase bp : {Broadphase::kSceneGraph, Broadphase::kSweepAndPrune, Broadphase::kField}) {
     EXPECT_NEAR(BoxSpeedOnConveyor(0.5, bp), 0.5, 1e-3) << ToString(bp);
     EXPECT_NEAR(BoxSpeedOnConveyor(-0.5, bp), -0.5, 1e-3) << ToString(bp);
     EXPECT_NEAR(BoxSpeedOnConveyor(0.0, bp), 0.0, 1e-4) << ToString(bp);
@@ -475,7 +475,7 @@ TEST(CollisionManager, AMovingSurfaceDragsWhatRestsOnIt) {
 }
 
 TEST(CollisionManager, BroadphaseNamesRoundTrip) {
-  for (Broadphase b : {Broadphase::kSceneGraph, Broadphase::kHash, Broadphase::kSweepAndPrune}) {
+  for (Broadphase b : {Broadphase::kSceneGraph, Broadphase::kHash, Broadphase::kSweepAndPrune, Broadphase::kField}) {
     EXPECT_EQ(ParseBroadphase(ToString(b)), b);
   }
   EXPECT_THROW(ParseBroadphase("octree"), std::invalid_argument);

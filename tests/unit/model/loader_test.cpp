@@ -198,7 +198,7 @@ TEST_F(Loader, DivBWorldResolvesItsFilesAndFillsEveryModel) {
   EXPECT_DOUBLE_EQ(w.physics.erp, 0.2);
   EXPECT_DOUBLE_EQ(w.physics.cfm, 1e-7);
   EXPECT_DOUBLE_EQ(w.physics.gravity.z(), -9.81);
-  EXPECT_EQ(w.physics.broadphase, "sap");
+  EXPECT_EQ(w.physics.broadphase, "field");
   EXPECT_EQ(w.physics.max_contacts, 1);
   EXPECT_EQ(w.seed, 1u);
   EXPECT_TRUE(w.plugin_paths.empty());

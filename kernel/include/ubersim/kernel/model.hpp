@@ -192,7 +192,7 @@ struct PhysicsOverrides {
   std::optional<double> erp;                          ///< global ERP
   std::optional<double> cfm;                          ///< global CFM, m/N
   std::optional<Vec3> gravity;                        ///< m/s²
-  std::optional<std::string> broadphase;              ///< "sap", "scene_graph" or "hash"
+  std::optional<std::string> broadphase;              ///< "field", "sap", "scene_graph" or "hash"
   std::optional<int> max_contacts;                    ///< contacts per geometry pair
   std::optional<double> contact_surface_layer;        ///< m
   std::optional<double> contact_max_correcting_velocity;  ///< m/s
@@ -221,7 +221,7 @@ struct PhysicsModel {
   double erp = 0.2;                ///< global ERP
   double cfm = 1e-7;               ///< global CFM
   Vec3 gravity = Vec3(0, 0, -9.81);  ///< m/s²
-  std::string broadphase = "sap";  ///< "sap" (measured fastest), "scene_graph" or "hash"
+  std::string broadphase = "field";  ///< "field" (measured fastest), "sap", "scene_graph" or "hash"
   int max_contacts = 4;            ///< contacts per geometry pair
   double contact_surface_layer = 0.0005;  ///< m
   /// m/s: penetrations are undone at most this fast (the robots' top speed; faster threw a robot
