@@ -621,13 +621,17 @@ void CollisionManager::SweepRobots() {
   swept_.clear();
   for (GeomImpl* g : hulls_) {
     if (!g->collides()) continue;
-    const dReal* p = dGeomGetPosition(g->id());
+    // The body's position, not the shell's: the shell's pose is computed only for pairs that
+    // pass these bounds (each grown by how far the shell's centre may lie from the body's).
+    const dReal* p = dBodyGetPosition(g->body()->id());
+    const dReal* offset = dGeomGetOffsetPosition(g->id());
+    const double slack = std::sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2]);
     const dReal* v = dBodyGetLinearVel(g->body()->id());
     const dReal* w = dBodyGetAngularVel(g->body()->id());
     const Vec3 velocity(v[0], v[1], v[2]);
     const double rim = std::abs(w[2]) * g->prism()->radius;
     swept_.push_back({g, p[0], p[1], velocity, rim, g->prism()->radius,
-                      g->prism()->radius + (velocity.norm() + rim) * dt});
+                      g->prism()->radius + (velocity.norm() + rim) * dt + slack, slack});
   }
   for (std::size_t i = 0; i < swept_.size(); ++i) {
     const SweptHull& sa = swept_[i];
@@ -635,10 +639,18 @@ void CollisionManager::SweepRobots() {
     for (std::size_t k = i + 1; k < swept_.size(); ++k) {
       const SweptHull& sb = swept_[k];
       // Farther apart than both could reach at their own speeds: no closer test can pass.
-      const double dx = sa.x - sb.x, dy = sa.y - sb.y, bound = sa.reach_bound + sb.reach_bound;
+      double dx = sa.x - sb.x, dy = sa.y - sb.y;
+      const double bound = sa.reach_bound + sb.reach_bound;
       if (dx * dx + dy * dy > bound * bound) continue;
       GeomImpl& b = *sb.geom;
       if (a.robot() == b.robot()) continue;
+      // Near by their bodies: the shells' own centres from here on (their poses computed now).
+      const dReal* ca = dGeomGetPosition(a.id());
+      const dReal* cb = dGeomGetPosition(b.id());
+      dx = ca[0] - cb[0];
+      dy = ca[1] - cb[1];
+      const double exact = bound - sa.slack - sb.slack;
+      if (dx * dx + dy * dy > exact * exact) continue;
       // The most the two can close in this step: their relative speed, and what turning adds at
       // the shells' rims (a flat front's corners sweep 1.35 m/s at 15 rad/s). Slower than a
       // millimetre a step, the ordinary contacts suffice.

@@ -266,7 +266,8 @@ class CollisionManager {
     Vec3 velocity;       // m/s
     double rim_speed;    // |ω_z|·radius, m/s
     double radius;       // m
-    double reach_bound;  // radius + (|v| + rim_speed)·dt: no pair reaches farther, m
+    double reach_bound;  // radius + (|v| + rim_speed)·dt + slack: no pair reaches farther, m
+    double slack;        // how far the shell's centre may lie from its body's origin (x, y), m
   };
   std::vector<SweptHull> swept_;
   bool hulls_found_ = false;
