@@ -447,7 +447,7 @@ void Robot::SetPresent(bool present) {
   });
 }
 
-RobotState Robot::State() const {
+RobotState Robot::Kinematics() const {
   RobotState s;
   s.id = id_;
   s.present = present_;
@@ -455,6 +455,11 @@ RobotState Robot::State() const {
   s.twist = chassis_->GetTwist();
   s.radius = model_->body.radius;
   s.height = model_->body.height;
+  return s;
+}
+
+RobotState Robot::State() const {
+  RobotState s = Kinematics();
   // A robot off the field touches nothing and kicks nothing, whatever its parts last saw; a
   // part switched off reports nothing.
   if (!present_) return s;

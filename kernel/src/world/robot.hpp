@@ -72,6 +72,9 @@ class Robot {
   void SetPresent(bool present);
   /// Ground truth.
   RobotState State() const;
+  /// Ground truth without what its parts report (no dribbler contact, kicker charge or drive
+  /// feedback): where it is and how it moves, for the cameras.
+  RobotState Kinematics() const;
 
   /// Reports and puts back the robot's non-finite bodies, found in `step` where no plugin call
   /// can be blamed (`when`: "after the physics step", …; `what`: the state check's finding). A

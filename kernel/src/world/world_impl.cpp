@@ -862,10 +862,12 @@ void WorldImpl::Step() {
   }
 
   // One ground truth serves the cameras and the transports, and is taken only when one needs it.
+  // Cameras alone (a batch or a bench run) need no part's report: the drives' feedback was half
+  // of a snapshot's work.
   std::optional<WorldSnapshot> truth;
   t0 = SteadyClock::now();
   if (perception_.CaptureDue(sim_time_ns_)) {
-    truth = GroundTruth();
+    truth = transports_.empty() ? Kinematics() : GroundTruth();
     perception_.Capture(*truth);
   }
   const std::vector<VisionFrame> frames = perception_.Release(sim_time_ns_);
@@ -906,7 +908,10 @@ void WorldImpl::RepairNonFinite(const char* when) {
   kernel::RepairNonFinite(scene_->Root(), last_good_);
 }
 
-WorldSnapshot WorldImpl::GroundTruth() const {
+WorldSnapshot WorldImpl::GroundTruth() const { return Snapshot(true); }
+WorldSnapshot WorldImpl::Kinematics() const { return Snapshot(false); }
+
+WorldSnapshot WorldImpl::Snapshot(bool parts) const {
   WorldSnapshot s;
   s.step = clock_.steps();
   s.sim_time_ns = clock_.time_ns();
@@ -914,7 +919,7 @@ WorldSnapshot WorldImpl::GroundTruth() const {
   s.ball.twist = ball_->GetTwist();
   s.ball.radius = model_.ball->radius;
   s.robots.reserve(robots_.size());
-  for (const auto& r : robots_) s.robots.push_back(r->State());
+  for (const auto& r : robots_) s.robots.push_back(parts ? r->State() : r->Kinematics());
   // Blue first, then yellow, each by id (robots that came on later are last in robots_).
   std::sort(s.robots.begin(), s.robots.end(), [](const RobotState& a, const RobotState& b) {
     return a.id.team != b.id.team ? a.id.team == Team::kBlue : a.id.id < b.id.id;

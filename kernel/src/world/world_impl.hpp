@@ -82,6 +82,9 @@ class WorldImpl {
   const SimClock& clock() const { return clock_; }
   /// Ground truth now.
   WorldSnapshot GroundTruth() const;
+  /// GroundTruth without what robots' parts report (Robot::Kinematics): what cameras see.
+  WorldSnapshot Kinematics() const;
+  WorldSnapshot Snapshot(bool parts) const;
   /// A hash of every body's position, orientation and velocities, bit for bit.
   std::uint64_t StateHash() const;
 
