@@ -251,6 +251,7 @@ void CollisionManager::Refile() {
   sweep_target_reach_.clear();
   hulls_found_ = false;
   hulls_.clear();
+  hull_slack_.clear();
   hull_touching_.clear();
   surfaces_.clear();
   ball_touching_.clear();
@@ -613,19 +614,23 @@ void CollisionManager::Collide() {
 void CollisionManager::SweepRobots() {
   if (!hulls_found_) {  // the robots on the field now; Refile starts over when they change
     graph_.Root().ForEachGeom([&](GeomImpl& g) {
-      if (g.hull() && g.prism() && g.body()) hulls_.push_back(&g);
+      if (g.hull() && g.prism() && g.body()) {
+        hulls_.push_back(&g);
+        const dReal* offset = dGeomGetOffsetPosition(g.id());
+        hull_slack_.push_back(std::sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2]));
+      }
     });
     hulls_found_ = true;
   }
   const double dt = swept_robot_step_;
   swept_.clear();
-  for (GeomImpl* g : hulls_) {
+  for (std::size_t h = 0; h < hulls_.size(); ++h) {
+    GeomImpl* g = hulls_[h];
     if (!g->collides()) continue;
     // The body's position, not the shell's: the shell's pose is computed only for pairs that
     // pass these bounds (each grown by how far the shell's centre may lie from the body's).
     const dReal* p = dBodyGetPosition(g->body()->id());
-    const dReal* offset = dGeomGetOffsetPosition(g->id());
-    const double slack = std::sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2]);
+    const double slack = hull_slack_[h];
     const dReal* v = dBodyGetLinearVel(g->body()->id());
     const dReal* w = dBodyGetAngularVel(g->body()->id());
     const Vec3 velocity(v[0], v[1], v[2]);
@@ -633,56 +638,75 @@ void CollisionManager::SweepRobots() {
     swept_.push_back({g, p[0], p[1], velocity, rim, g->prism()->radius,
                       g->prism()->radius + (velocity.norm() + rim) * dt + slack, slack});
   }
+  // The pairs within reach along x, found on the hulls sorted by x; then taken in the hulls'
+  // own order, the order their contacts were always made in.
+  swept_order_.resize(swept_.size());
+  double farthest = 0.0;
   for (std::size_t i = 0; i < swept_.size(); ++i) {
+    swept_order_[i] = i;
+    farthest = std::max(farthest, swept_[i].reach_bound);
+  }
+  std::sort(swept_order_.begin(), swept_order_.end(), [this](std::size_t a, std::size_t b) {
+    return swept_[a].x < swept_[b].x || (swept_[a].x == swept_[b].x && a < b);
+  });
+  swept_pairs_.clear();
+  for (std::size_t u = 0; u < swept_order_.size(); ++u) {
+    const std::size_t i = swept_order_[u];
+    for (std::size_t t = u + 1; t < swept_order_.size(); ++t) {
+      const std::size_t k = swept_order_[t];
+      if (swept_[k].x - swept_[i].x > swept_[i].reach_bound + farthest) break;  // so is every later one
+      swept_pairs_.emplace_back(std::min(i, k), std::max(i, k));
+    }
+  }
+  std::sort(swept_pairs_.begin(), swept_pairs_.end());
+  for (const auto& [i, k] : swept_pairs_) {
     const SweptHull& sa = swept_[i];
     GeomImpl& a = *sa.geom;
-    for (std::size_t k = i + 1; k < swept_.size(); ++k) {
-      const SweptHull& sb = swept_[k];
-      // Farther apart than both could reach at their own speeds: no closer test can pass.
-      double dx = sa.x - sb.x, dy = sa.y - sb.y;
-      const double bound = sa.reach_bound + sb.reach_bound;
-      if (dx * dx + dy * dy > bound * bound) continue;
-      GeomImpl& b = *sb.geom;
-      if (a.robot() == b.robot()) continue;
-      // Near by their bodies: the shells' own centres from here on (their poses computed now).
-      const dReal* ca = dGeomGetPosition(a.id());
-      const dReal* cb = dGeomGetPosition(b.id());
-      dx = ca[0] - cb[0];
-      dy = ca[1] - cb[1];
-      const double exact = bound - sa.slack - sb.slack;
-      if (dx * dx + dy * dy > exact * exact) continue;
-      // The most the two can close in this step: their relative speed, and what turning adds at
-      // the shells' rims (a flat front's corners sweep 1.35 m/s at 15 rad/s). Slower than a
-      // millimetre a step, the ordinary contacts suffice.
-      const double reach = ((sa.velocity - sb.velocity).norm() + sa.rim_speed + sb.rim_speed) * dt;
-      if (reach < 0.001) continue;
-      const double apart = std::hypot(dx, dy);
-      if (apart > sa.radius + sb.radius + reach) continue;
-      const bool touching = std::any_of(hull_touching_.begin(), hull_touching_.end(), [&](const auto& pair) {
-        return (pair.first == &a && pair.second == &b) || (pair.first == &b && pair.second == &a);
-      });
-      if (touching) continue;  // its contacts are made already
-      const Pose pa = a.GetPose(), pb = b.GetPose();
-      // a's shell grown by the reach meets b's where the two would meet within the step.
-      FlatFrontPrism grown = *a.prism();
-      grown.radius += reach;
-      grown.front_distance += reach;
-      const int n = CollideUprightPrisms(grown, pa, *b.prism(), pb, kShellContacts, scratch_.data());
-      if (n <= 0) continue;  // leaning (the mesh test's), or not within reach
-      approach_.resize(static_cast<std::size_t>(n));
-      for (int c = 0; c < n; ++c) {
-        dContactGeom& cg = scratch_[static_cast<std::size_t>(c)];
-        const double gap = std::max(0.0, reach - cg.depth);
-        approach_[static_cast<std::size_t>(c)] = gap / dt;
-        cg.depth = 0.0;
-        cg.g1 = a.id();
-        cg.g2 = b.id();
-      }
-      stats_.swept_contacts += static_cast<std::size_t>(n);
-      robots_in_contact_.push_back(a.body()->id());
-      robots_in_contact_.push_back(b.body()->id());
-      AddContacts(a, b, n, approach_.data());
+    const SweptHull& sb = swept_[k];
+    // Farther apart than both could reach at their own speeds: no closer test can pass.
+    double dx = sa.x - sb.x, dy = sa.y - sb.y;
+    const double bound = sa.reach_bound + sb.reach_bound;
+    if (dx * dx + dy * dy > bound * bound) continue;
+    GeomImpl& b = *sb.geom;
+    if (a.robot() == b.robot()) continue;
+    // Near by their bodies: the shells' own centres from here on (their poses computed now).
+    const dReal* ca = dGeomGetPosition(a.id());
+    const dReal* cb = dGeomGetPosition(b.id());
+    dx = ca[0] - cb[0];
+    dy = ca[1] - cb[1];
+    const double exact = bound - sa.slack - sb.slack;
+    if (dx * dx + dy * dy > exact * exact) continue;
+    // The most the two can close in this step: their relative speed, and what turning adds at
+    // the shells' rims (a flat front's corners sweep 1.35 m/s at 15 rad/s). Slower than a
+    // millimetre a step, the ordinary contacts suffice.
+    const double reach = ((sa.velocity - sb.velocity).norm() + sa.rim_speed + sb.rim_speed) * dt;
+    if (reach < 0.001) continue;
+    const double apart = std::hypot(dx, dy);
+    if (apart > sa.radius + sb.radius + reach) continue;
+    const bool touching = std::any_of(hull_touching_.begin(), hull_touching_.end(), [&](const auto& pair) {
+      return (pair.first == &a && pair.second == &b) || (pair.first == &b && pair.second == &a);
+    });
+    if (touching) continue;  // its contacts are made already
+    const Pose pa = a.GetPose(), pb = b.GetPose();
+    // a's shell grown by the reach meets b's where the two would meet within the step.
+    FlatFrontPrism grown = *a.prism();
+    grown.radius += reach;
+    grown.front_distance += reach;
+    const int n = CollideUprightPrisms(grown, pa, *b.prism(), pb, kShellContacts, scratch_.data());
+    if (n <= 0) continue;  // leaning (the mesh test's), or not within reach
+    approach_.resize(static_cast<std::size_t>(n));
+    for (int c = 0; c < n; ++c) {
+      dContactGeom& cg = scratch_[static_cast<std::size_t>(c)];
+      const double gap = std::max(0.0, reach - cg.depth);
+      approach_[static_cast<std::size_t>(c)] = gap / dt;
+      cg.depth = 0.0;
+      cg.g1 = a.id();
+      cg.g2 = b.id();
     }
+    stats_.swept_contacts += static_cast<std::size_t>(n);
+    robots_in_contact_.push_back(a.body()->id());
+    robots_in_contact_.push_back(b.body()->id());
+    AddContacts(a, b, n, approach_.data());
   }
 }
 
@@ -737,12 +761,14 @@ void CollisionManager::SweepFastBalls() {
     // resting ball moved 7 mm a step at 5 ms, and had the ball 11 mm inside its shell.
     for (std::size_t k = 0; k < sweep_shells_.size(); ++k) {
       GeomImpl& shell = *sweep_shells_[k];
-      if (!MayCollide(*ball, shell)) continue;
-      const Vec3 relative = v - shell.body()->GetTwist().linear;
       // Out of reach of the ball's path however the shell is turned: its pose is not needed.
-      const dReal* at = dBodyGetPosition(shell.body()->id());
+      const dBodyID body = shell.body()->id();
+      const dReal* at = dBodyGetPosition(body);
+      const dReal* w = dBodyGetLinearVel(body);
+      const Vec3 relative = v - Vec3(w[0], w[1], w[2]);
       const double bound = relative.norm() * swept_ball_step_ + radius + sweep_shell_reach_[k];
       if ((from - Vec3(at[0], at[1], at[2])).squaredNorm() > bound * bound) continue;
+      if (!MayCollide(*ball, shell)) continue;
       SweepBallAt(*ball, shell, from, relative, radius);
     }
     // Everything else by the ball's own speed. Slower than half a radius per step the ordinary
@@ -753,12 +779,13 @@ void CollisionManager::SweepFastBalls() {
     const bool slow = reach <= 0.5 * radius;
     for (std::size_t k = 0; k < sweep_targets_.size(); ++k) {
       GeomImpl& other = *sweep_targets_[k];
-      if (&other == ball || (slow && !other.body()) || !MayCollide(*ball, other)) continue;
+      if (&other == ball || (slow && !other.body())) continue;
       if (other.body()) {  // a robot's part: out of reach by its body's position, as the shells
         const dReal* at = dBodyGetPosition(other.body()->id());
         const double bound = reach + radius + sweep_target_reach_[k];
         if ((from - Vec3(at[0], at[1], at[2])).squaredNorm() > bound * bound) continue;
       }
+      if (!MayCollide(*ball, other)) continue;
       SweepBallAt(*ball, other, from, v, radius);
     }
   }

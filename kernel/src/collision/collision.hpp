@@ -270,7 +270,10 @@ class CollisionManager {
     double slack;        // how far the shell's centre may lie from its body's origin (x, y), m
   };
   std::vector<SweptHull> swept_;
+  std::vector<std::size_t> swept_order_;                          // swept_ by x
+  std::vector<std::pair<std::size_t, std::size_t>> swept_pairs_;  // within reach along x
   bool hulls_found_ = false;
+  std::vector<double> hull_slack_;  // SweptHull::slack of each of hulls_
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> hull_touching_;  // this step's shell pairs
   std::vector<dBodyID> robots_in_contact_;  // this step's chassis touching another robot
   std::vector<double> approach_;            // SweepRobots' per-contact approach speeds
