@@ -33,6 +33,12 @@ double CombineOptional(double a, double b, Pick pick) {
   return pick(a, b);
 }
 
+// How far a geometry's origin lies from its body's, m (0 for one without an offset).
+double OffsetDistance(const GeomImpl& g) {
+  const dReal* offset = dGeomGetOffsetPosition(g.id());
+  return std::sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2]);
+}
+
 bool AabbsOverlap(dGeomID a, dGeomID b) {
   dReal x[6], y[6];
   dGeomGetAABB(a, x);
@@ -616,8 +622,7 @@ void CollisionManager::SweepRobots() {
     graph_.Root().ForEachGeom([&](GeomImpl& g) {
       if (g.hull() && g.prism() && g.body()) {
         hulls_.push_back(&g);
-        const dReal* offset = dGeomGetOffsetPosition(g.id());
-        hull_slack_.push_back(std::sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2]));
+        hull_slack_.push_back(OffsetDistance(g));
       }
     });
     hulls_found_ = true;
@@ -732,8 +737,7 @@ namespace {
 // the geometry however the body turns).
 double ReachFromBody(const GeomImpl& g) {
   if (!g.body()) return 0.0;
-  const dReal* offset = dGeomGetOffsetPosition(g.id());
-  return std::sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2]) + g.GetShape().BoundingRadius();
+  return OffsetDistance(g) + g.GetShape().BoundingRadius();
 }
 
 }  // namespace
