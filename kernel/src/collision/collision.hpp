@@ -210,15 +210,16 @@ class CollisionManager {
     }
   };
 
-  // The field broadphase's moving groups: a robot's geometries, or a loose body's. Each step a
-  // group's box is the union of its bodies' positions grown by how far each body's geometries
-  // reach from it (rigid: measured once, when grouped).
+  // A geometry of a field broadphase group, with what its carpet test needs.
   struct FieldGeom {
     GeomImpl* geom;
     const dReal* position;  // its body's (ODE's own arrays: they live as long as the body)
     const dReal* rotation;
     Vec3 centre, half;      // its box in its body's frame, m: a plane needs no world box of it
   };
+  // The field broadphase's moving groups: a robot's geometries, or a loose body's. Each step a
+  // group's box is the union of its bodies' positions grown by how far each body's geometries
+  // reach from it (rigid: measured once, when grouped).
   struct FieldGroup {
     std::vector<GeomImpl*> geoms;
     std::vector<FieldGeom> boxed;                     // the same geometries with their boxes
@@ -267,7 +268,7 @@ class CollisionManager {
     double rim_speed;    // |ω_z|·radius, m/s
     double radius;       // m
     double reach_bound;  // radius + (|v| + rim_speed)·dt + slack: no pair reaches farther, m
-    double slack;        // how far the shell's centre may lie from its body's origin (x, y), m
+    double slack;        // how far the shell's origin lies from its body's, m
   };
   std::vector<SweptHull> swept_;
   std::vector<std::size_t> swept_order_;                          // swept_ by x
