@@ -553,6 +553,20 @@ TEST(PlacedBall, InsideARobotsShellItGoesToTheShellsSurface) {
   }
 }
 
+TEST(PlacedBall, OnARobotsCentreItGoesOutThroughTheNearestFace) {
+  TwoRobots w("fast", "ssl-omni-2026.yaml", 0.0, 2.0);  // blue at the origin facing +x
+  const Vec3 landed = PutBall(w, Vec3(0.0, 0.0, 0.0215));
+  // The flat front is the nearest way out: its face 0.07 m ahead of the centre (a little more
+  // than its distance to the circle's side, 0.09 m).
+  EXPECT_GT(landed.x(), 0.07 + 0.0215 - 0.001);
+  EXPECT_LT(landed.head<2>().norm(), 0.07 + 0.0215 + 0.004);
+  StateCheckOptions o;
+  o.finite = o.speed = o.carpet = o.tilt = false;
+  for (const StateViolation& v : CheckState(*w.world, o)) {
+    EXPECT_NE(v.object.kind, StateObject::Kind::kBall) << v.value << " m in";
+  }
+}
+
 TEST(PlacedBall, InsideAWallItGoesToTheWallsFace) {
   TwoRobots w("fast", "ssl-omni-2026.yaml", 0.0, 2.0);
   // Div B's touch-line wall has its inner face at y = 3.3: the ball put 15 mm into it.

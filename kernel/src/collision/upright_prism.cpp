@@ -467,9 +467,21 @@ int CollideFlatFrontPrismWithSphere(const FlatFrontPrism& prism, const Pose& pri
     const Vec3 gap = p - surface;
     const double distance = gap.norm();
     if (distance >= radius) return 0;
-    if (distance < 1e-12) return 0;  // on the surface exactly: the next step decides
-    normal = gap / distance;
-    depth = radius - distance;
+    if (distance < 1e-12) {
+      // The centre on the surface (within rounding): half the sphere is in. Out along the
+      // surface's own normal there: the top or bottom, the flat face, or the round wall.
+      if (std::abs(p.z()) >= h) {
+        normal = Vec3(0.0, 0.0, p.z() > 0 ? 1.0 : -1.0);
+      } else if (qx >= f) {
+        normal = Vec3::UnitX();
+      } else {
+        normal = Vec3(qx / r, qy / r, 0.0);
+      }
+      depth = radius;
+    } else {
+      normal = gap / distance;
+      depth = radius - distance;
+    }
   }
   const Vec3 world_normal = prism_pose.orientation * normal;
   const Vec3 world_surface = prism_pose.position + prism_pose.orientation * surface;

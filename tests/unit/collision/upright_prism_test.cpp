@@ -394,6 +394,14 @@ TEST(UprightPrism, ABallMeetsTheShellAsTheSolidItStandsFor) {
   ASSERT_EQ(CollideFlatFrontPrismWithSphere(kShell, leaning, Vec3(edge.x() - 0.01, 0, 0.0215), r, &c), 1);
   EXPECT_LT(c.normal[0], -0.9);
   EXPECT_GT(c.depth, 0.005);
+  // Centred a rounding error outside the surface: half in, out along the surface's normal (it
+  // was no contact, and a placed ball searched for a free spot stopped half inside the face).
+  ASSERT_EQ(CollideFlatFrontPrismWithSphere(kShell, at, Vec3(0.07 + 1e-15, 0.01, 0.0215), r, &c), 1);
+  EXPECT_NEAR(c.depth, r, 1e-12);
+  EXPECT_NEAR(c.normal[0], 1.0, 1e-12);
+  ASSERT_EQ(CollideFlatFrontPrismWithSphere(kShell, at, Vec3(-0.09 - 1e-15, 0, 0.0215), r, &c), 1);
+  EXPECT_NEAR(c.depth, r, 1e-12);
+  EXPECT_NEAR(c.normal[0], -1.0, 1e-12);
 }
 
 }  // namespace
