@@ -39,6 +39,13 @@ double OffsetDistance(const GeomImpl& g) {
   return std::sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2]);
 }
 
+// How far a geometry on a body reaches from the body's origin, m (a sphere about it that holds
+// the geometry however the body turns).
+double ReachFromBody(const GeomImpl& g) {
+  if (!g.body()) return 0.0;
+  return OffsetDistance(g) + g.GetShape().BoundingRadius();
+}
+
 bool AabbsOverlap(dGeomID a, dGeomID b) {
   dReal x[6], y[6];
   dGeomGetAABB(a, x);
@@ -468,7 +475,9 @@ void CollisionManager::GroupForField() {
   std::map<const void*, std::size_t> group_of;  // robot node or loose body -> group
   for (GeomImpl* g : geoms) {
     if (g->is_plane()) {
-      field_planes_.push_back(g);
+      dVector4 p;
+      dGeomPlaneGetParams(g->id(), p);
+      field_planes_.push_back({g, Vec3(p[0], p[1], p[2]), p[3]});
       continue;
     }
     if (!g->body()) {
@@ -481,12 +490,10 @@ void CollisionManager::GroupForField() {
     const auto [it, added] = group_of.emplace(key, field_groups_.size());
     if (added) field_groups_.emplace_back();
     FieldGroup& group = field_groups_[it->second];
-    group.geoms.push_back(g);
-    group.boxed.push_back(BoxInBodyFrame(*g));
+    group.geoms.push_back(BoxInBodyFrame(*g));
     // How far this geometry reaches from its body's origin; a little more, for the rounding.
     const dBodyID body = g->body()->id();
-    const BoundingSphere b = g->WorldBounds();
-    const double reach = (b.center - ToVec3(dBodyGetPosition(body))).norm() + b.radius + 1e-6;
+    const double reach = ReachFromBody(*g) + 1e-6;
     auto known = std::find_if(group.bodies.begin(), group.bodies.end(), [body](const auto& e) { return e.first == body; });
     if (known == group.bodies.end()) {
       group.bodies.emplace_back(body, reach);
@@ -503,7 +510,7 @@ template <typename F>
 void CollisionManager::ForEachFieldPair(F& f) {
   if (!field_grouped_) GroupForField();
   for (FieldGroup& group : field_groups_) {
-    group.active = std::any_of(group.geoms.begin(), group.geoms.end(), [](const GeomImpl* g) { return g->collides(); });
+    group.active = std::any_of(group.geoms.begin(), group.geoms.end(), [](const FieldGeom& g) { return g.geom->collides(); });
     if (!group.active) continue;
     for (int k = 0; k < 3; ++k) {
       group.lo[k] = std::numeric_limits<double>::infinity();
@@ -539,8 +546,8 @@ void CollisionManager::ForEachFieldPair(F& f) {
       FieldGroup& b = field_groups_[field_order_[j]];
       if (b.lo[0] > a.hi[0]) break;  // every later box starts farther along x
       if (!b.active || b.lo[1] > a.hi[1] || a.lo[1] > b.hi[1] || b.lo[2] > a.hi[2] || a.lo[2] > b.hi[2]) continue;
-      for (GeomImpl* ga : a.geoms) {
-        for (GeomImpl* gb : b.geoms) pair_up(*ga, *gb);
+      for (const FieldGeom& ga : a.geoms) {
+        for (const FieldGeom& gb : b.geoms) pair_up(*ga.geom, *gb.geom);
       }
     }
   }
@@ -553,17 +560,14 @@ void CollisionManager::ForEachFieldPair(F& f) {
           box[4] > group.hi[2] || group.lo[2] > box[5]) {
         continue;
       }
-      for (GeomImpl* g : group.geoms) pair_up(*g, *s.geom);
+      for (const FieldGeom& g : group.geoms) pair_up(*g.geom, *s.geom);
     }
     // A plane's box is infinite: every geometry meets it in the narrow phase (which drops what
     // lies wholly on its free side).
-    for (GeomImpl* plane : field_planes_) {
-      dVector4 ps;
-      dGeomPlaneGetParams(plane->id(), ps);
-      const Vec3 normal(ps[0], ps[1], ps[2]);
-      for (const FieldGeom& b : group.boxed) {
-        if (BodyBoxAbovePlane(b.position, b.rotation, b.centre, b.half, normal, ps[3])) continue;
-        if (MayCollide(*b.geom, *plane)) f(*b.geom, *plane);
+    for (const FieldPlane& plane : field_planes_) {
+      for (const FieldGeom& b : group.geoms) {
+        if (BodyBoxAbovePlane(b.position, b.rotation, b.centre, b.half, plane.normal, plane.offset)) continue;
+        if (MayCollide(*b.geom, *plane.geom)) f(*b.geom, *plane.geom);
       }
     }
   }
@@ -727,17 +731,6 @@ bool SweepBallAgainstShell(const FlatFrontPrism& shell, const Pose& pose, const 
     if (CollideFlatFrontPrismWithSphere(shell, pose, at, radius, &hit) > 0) return true;
   }
   return false;
-}
-
-}  // namespace
-
-namespace {
-
-// How far a geometry on a body reaches from the body's origin, m (a sphere about it that holds
-// the geometry however the body turns).
-double ReachFromBody(const GeomImpl& g) {
-  if (!g.body()) return 0.0;
-  return OffsetDistance(g) + g.GetShape().BoundingRadius();
 }
 
 }  // namespace

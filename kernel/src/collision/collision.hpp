@@ -221,8 +221,7 @@ class CollisionManager {
   // group's box is the union of its bodies' positions grown by how far each body's geometries
   // reach from it (rigid: measured once, when grouped).
   struct FieldGroup {
-    std::vector<GeomImpl*> geoms;
-    std::vector<FieldGeom> boxed;                     // the same geometries with their boxes
+    std::vector<FieldGeom> geoms;
     std::vector<std::pair<dBodyID, double>> bodies;  // body, reach (m)
     double lo[3], hi[3];                              // this step's box
     bool active = false;                              // any geometry collides
@@ -231,11 +230,16 @@ class CollisionManager {
     GeomImpl* geom;
     dReal box[6];
   };
+  struct FieldPlane {
+    GeomImpl* geom;
+    Vec3 normal;    // the free side's, unit
+    double offset;  // normal·p = offset on the plane, m
+  };
   static FieldGeom BoxInBodyFrame(GeomImpl& g);
   std::vector<FieldGroup> field_groups_;
   std::vector<std::size_t> field_order_;     // field_groups_ by the box's low x (then index)
   std::vector<StaticGeom> field_statics_;    // the field's fixed geometries but planes
-  std::vector<GeomImpl*> field_planes_;
+  std::vector<FieldPlane> field_planes_;
   bool field_grouped_ = false;
 
   SceneGraph& graph_;
