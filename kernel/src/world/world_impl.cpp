@@ -19,13 +19,12 @@
 namespace ubersim::kernel {
 
 namespace {
+
 // A placed ball may overlap what it touches by this much, m (a contact's own surface layer and
 // some: a ball put against a robot's face stays exactly where put).
 constexpr double kPlacedBallOverlap = 0.001;
 // How far from where it was put a placed ball is searched a free spot, m.
 constexpr double kPlacedBallSearch = 0.3;
-}  // namespace
-namespace {
 
 using SteadyClock = std::chrono::steady_clock;
 

@@ -84,7 +84,6 @@ class WorldImpl {
   WorldSnapshot GroundTruth() const;
   /// GroundTruth without what robots' parts report (Robot::Kinematics): what cameras see.
   WorldSnapshot Kinematics() const;
-  WorldSnapshot Snapshot(bool parts) const;
   /// A hash of every body's position, orientation and velocities, bit for bit.
   std::uint64_t StateHash() const;
 
@@ -115,6 +114,8 @@ class WorldImpl {
   const PerceptionModel& perception() const { return perception_.model(); }
 
  private:
+  // The ground truth, with the robots' parts asked for their reports or not.
+  WorldSnapshot Snapshot(bool parts) const;
   void Build();
   // Reset without telling the transports (Reset and Restore).
   void Rebuild();
