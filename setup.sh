@@ -15,7 +15,7 @@ cd "$(dirname "$0")"
 PACKAGES=(
   g++ cmake ninja-build pkg-config git
   libode-dev libeigen3-dev liburdfdom-dev libtinyxml-dev libconsole-bridge-dev libassimp-dev
-  libboost-dev libboost-program-options-dev
+  libboost-dev libboost-program-options-dev zlib1g-dev
   libyaml-cpp-dev rapidjson-dev
   libprotobuf-dev protobuf-compiler
   libgtest-dev libgmock-dev libbenchmark-dev
