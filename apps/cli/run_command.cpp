@@ -17,6 +17,7 @@
 #include "command_line.hpp"
 #include "commands.hpp"
 #include "exit_codes.hpp"
+#include "match_flags.hpp"
 #include "progress.hpp"
 #include "run_overrides.hpp"
 #include "world_loading.hpp"
@@ -52,6 +53,7 @@ struct RunFlags {
   double crash_snapshot_interval = 1.0;
   RunOverrides overrides;
   PhysicsFlags physics;
+  MatchFlags match;
 };
 
 // The run's options, bound to `f`.
@@ -93,6 +95,9 @@ po::options_description RunOptionsOf(RunFlags& f) {
       ("crash-snapshot-interval", po::value<double>(&f.crash_snapshot_interval)->default_value(1.0),
        "simulated seconds between the in-memory snapshots a crash report writes (0: none)");
   f.physics.AddTo(desc);
+  po::options_description match("match (docs/match.md)");
+  f.match.AddTo(match);
+  desc.add(match);
   return desc;
 }
 
@@ -150,7 +155,15 @@ std::string StatusText(const RunStatus& s) {
 // crash guard's periodic snapshot, the status line; then the fault report when a plugin fault
 // stopped it. Returns the exit code.
 int Step(World& world, const WorldModel& model, const fs::path& world_file, const RunFlags& f,
-         const po::variables_map& vm, const std::vector<std::string>& args) {
+         const po::variables_map& vm, const std::vector<std::string>& args, Log& log) {
+  // The referee, tracker and recorder beside the world (--referee, --tracker, --record).
+  std::unique_ptr<sslog::LogWriter> record;
+  std::unique_ptr<match::MatchSession> session;
+  if (f.match.Any()) {
+    session = std::make_unique<match::MatchSession>(world, f.match.Options(model, f.overrides.local_only, record), log);
+    for (const auto& e : session->Endpoints()) std::cerr << "ubersim: publishing " << e << "\n";
+    if (record) std::cerr << "ubersim: recording to " << record->Path() << "\n";
+  }
   ProgressLine status(/*shown=*/vm.count("quiet") == 0);
   RunOptions options;
   options.duration = f.duration;
@@ -179,6 +192,7 @@ int Step(World& world, const WorldModel& model, const fs::path& world_file, cons
     }
   };
   options.between_steps = [&] {
+    if (session) session->AfterStep();
     if (SnapshotRequested().exchange(false)) {
       if (f.snapshot_out.empty()) {
         std::cerr << "ubersim: SIGUSR1: no --snapshot-out given, nothing saved\n";
@@ -200,6 +214,15 @@ int Step(World& world, const WorldModel& model, const fs::path& world_file, cons
   });
   std::cerr << "ubersim: stopped at sim time " << final_status.sim_time << " s after "
             << final_status.steps << " steps\n";
+  if (session && session->referee()) {
+    const auto& m = session->referee()->message();
+    std::cerr << "ubersim: " << m.yellow().name() << " (yellow) " << m.yellow().score() << " : " << m.blue().score() << " "
+              << m.blue().name() << " (blue), stage " << Referee::Stage_Name(m.stage()) << "\n";
+  }
+  if (record) {
+    record->Close();
+    std::cerr << "ubersim: recorded " << record->Records() << " messages to " << record->Path() << "\n";
+  }
   if (!f.snapshot_out.empty()) save_snapshot(world.stopped() ? "the world stopped" : "end of run");
   if (!world.stopped()) return kExitOk;
   WriteFaultReport(world, crash_files, run);
@@ -237,7 +260,7 @@ int RunCommand(const std::vector<std::string>& args) {
               << world.clock().seconds() << " s\n";
   }
   PrintWorld(model, world_file, world);
-  return Step(world, model, world_file, f, vm, args);
+  return Step(world, model, world_file, f, vm, args, log);
 }
 
 }  // namespace ubersim::cli

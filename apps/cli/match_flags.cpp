@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "match_flags.hpp"
+
+#include "exit_codes.hpp"
+
+namespace ubersim::cli {
+
+namespace po = boost::program_options;
+
+void MatchFlags::AddTo(po::options_description& desc) {
+  desc.add_options()
+      ("referee", po::value<std::string>(&referee)->default_value("none"),
+       "builtin: ÜberSim referees the match and publishes Referee messages on 224.5.23.1:10003 (docs/match.md); none")
+      ("tracker", po::bool_switch(&tracker), "publish tracked vision (TrackerWrapperPacket) from the simulated truth on 224.5.23.2:10010")
+      ("record", po::value<std::string>(&record),
+       "write every vision, referee and tracker message to FILE in the league's log format (.gz: compressed)")
+      ("half-duration", po::value<double>(&half_duration)->default_value(300.0), "playing time per half, s")
+      ("half-time-break", po::value<double>(&half_time_break)->default_value(300.0), "half-time break, s")
+      ("first-kickoff", po::value<std::string>(&first_kickoff)->default_value("yellow"), "team that kicks off first: yellow or blue")
+      ("yellow-name", po::value<std::string>(&yellow_name)->default_value("Yellow"), "yellow team's name")
+      ("blue-name", po::value<std::string>(&blue_name)->default_value("Blue"), "blue team's name")
+      ("yellow-keeper", po::value<int>(&yellow_keeper)->default_value(0), "yellow goalkeeper's id")
+      ("blue-keeper", po::value<int>(&blue_keeper)->default_value(0), "blue goalkeeper's id")
+      ("placement", po::value<std::string>(&placement)->default_value("auto"),
+       "who places the ball for free kicks: auto (the team; the simulator when the team makes no progress) or simulator");
+}
+
+match::MatchOptions MatchFlags::Options(const kernel::WorldModel& model, bool local_only,
+                                        std::unique_ptr<sslog::LogWriter>& writer) const {
+  match::MatchOptions o;
+  if (referee != "none" && referee != "builtin") {
+    throw UsageError("--referee " + referee + ": builtin or none");
+  }
+  if (first_kickoff != "yellow" && first_kickoff != "blue") throw UsageError("--first-kickoff " + first_kickoff + ": yellow or blue");
+  if (placement != "auto" && placement != "simulator") throw UsageError("--placement " + placement + ": auto or simulator");
+  if (!(half_duration > 0) || !(half_time_break >= 0)) throw UsageError("--half-duration must be > 0 and --half-time-break >= 0");
+  if (referee == "builtin") {
+    match::RefereeConfig c;
+    // Div B's field is 9 × 6 m: its robot limit and time limits follow.
+    c.division = model.field->geometry.field_length < 10.5 ? match::Division::kB : match::Division::kA;
+    c.half_duration = half_duration;
+    c.half_time_break = half_time_break;
+    c.first_kickoff = first_kickoff == "blue" ? Team::kBlue : Team::kYellow;
+    c.yellow_name = yellow_name;
+    c.blue_name = blue_name;
+    c.yellow_keeper = yellow_keeper;
+    c.blue_keeper = blue_keeper;
+    c.yellow_can_place = c.blue_can_place = placement == "auto";
+    o.referee = c;
+  }
+  o.tracker = tracker;
+  o.local_only = local_only;
+  if (!record.empty()) {
+    writer = std::make_unique<sslog::LogWriter>(record);
+    sslog::LogWriter* w = writer.get();
+    o.recorder = [w](std::int64_t unix_ns, match::WireMessage type, const std::string& bytes) {
+      w->Write(unix_ns, static_cast<std::int32_t>(type), bytes);
+    };
+  }
+  return o;
+}
+
+}  // namespace ubersim::cli

@@ -1,0 +1,40 @@
+// SPDX-License-Identifier: Apache-2.0
+// The match options `ubersim run` and `ubersim match` share: the referee, tracked output and the
+// log file they record (--referee, --tracker, --record, the match's length and teams).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <boost/program_options.hpp>
+
+#include "match_session.hpp"
+#include "ssl_log.hpp"
+#include "ubersim/kernel/model.hpp"
+
+namespace ubersim::cli {
+
+/// What the command line says about the match.
+struct MatchFlags {
+  std::string referee = "none";   ///< none or builtin
+  bool tracker = false;           ///< --tracker
+  std::string record;             ///< --record FILE
+  double half_duration = 300.0;   ///< s
+  double half_time_break = 300.0; ///< s
+  std::string first_kickoff = "yellow";
+  std::string yellow_name = "Yellow", blue_name = "Blue";
+  int yellow_keeper = 0, blue_keeper = 0;
+  std::string placement = "auto";  ///< who places the ball: auto (teams, the simulator when they do not), simulator
+
+  /// Adds the options to `desc`.
+  void AddTo(boost::program_options::options_description& desc);
+  /// The session's options for `model` (the division from its field), with the log writer made
+  /// when --record is given (kept in `writer`). Throws UsageError for a bad value and
+  /// std::runtime_error naming the file it cannot write.
+  match::MatchOptions Options(const kernel::WorldModel& model, bool local_only, std::unique_ptr<sslog::LogWriter>& writer) const;
+  /// True when any match option is on (a session is needed).
+  bool Any() const { return referee != "none" || tracker || !record.empty(); }
+};
+
+}  // namespace ubersim::cli

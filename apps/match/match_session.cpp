@@ -1,0 +1,168 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "match_session.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <span>
+#include <stdexcept>
+
+#include "tracker_packets.hpp"
+#include "transport_common/multicast_sender.hpp"
+#include "transport_common/wire_clock.hpp"
+#include "vision_packets.hpp"
+
+namespace ubersim::match {
+namespace {
+
+std::span<const std::uint8_t> Bytes(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+std::int64_t PeriodNs(double rate) { return rate > 0 ? static_cast<std::int64_t>(std::llround(1e9 / rate)) : 0; }
+
+}  // namespace
+
+struct MatchSession::Senders {
+  std::unique_ptr<transport::MulticastSender> referee;
+  std::unique_ptr<transport::MulticastSender> tracker;
+  // Vision as recorded: the same packet builder the ssl_vision transport sends with.
+  std::unique_ptr<transport::WireClock> vision_clock;
+  ssl_vision::GeometryInputs geometry;
+  std::int64_t next_geometry_ns = 0;
+};
+
+MatchSession::MatchSession(kernel::World& world, MatchOptions options, Log& log)
+    : world_(world), options_(std::move(options)), log_(log), senders_(std::make_unique<Senders>()) {
+  const bool local = options_.local_only || world_.model().local_only;
+  auto sender = [&](const std::string& group, std::uint16_t port, const char* name) {
+    transport::MulticastSender::Options o;
+    o.group = group;
+    o.port = port;
+    o.local_only = local;
+    o.name = name;
+    return std::make_unique<transport::MulticastSender>(o);
+  };
+  if (options_.referee) {
+    const WorldSnapshot truth = world_.GroundTruth();
+    referee_ = std::make_unique<RefereeEngine>(*options_.referee, *truth.field, UnixOffset());
+    if (options_.network) senders_->referee = sender(options_.referee_address, options_.referee_port, "referee");
+  }
+  if (options_.tracker) {
+    tracker_uuid_ = UuidFromSeed(world_.model().seed);
+    if (options_.network) senders_->tracker = sender(options_.tracker_address, options_.tracker_port, "tracker");
+  }
+  if (options_.recorder) {
+    const WorldSnapshot truth = world_.GroundTruth();
+    senders_->geometry.field = *truth.field;
+    for (const auto& c : world_.perception().cameras) senders_->geometry.cameras.push_back({c.id, c.position});
+    senders_->geometry.ball_radius = truth.ball.radius;
+    // The detections' own time stamps on the session's clock, so they agree with the records'.
+    senders_->vision_clock = std::make_unique<transport::WireClock>(
+        options_.unix_timestamps ? transport::TimestampMode::kUnix : transport::TimestampMode::kSim,
+        [this] { return static_cast<double>(UnixOffset() + world_.clock().time_ns()) * 1e-9; });
+    world_.SetVisionObserver([this](const VisionFrame& frame) {
+      const std::int64_t offset = UnixOffset();
+      if (frame.t_sent_ns >= senders_->next_geometry_ns) {
+        std::string g;
+        ssl_vision::GeometryPacket(senders_->geometry).SerializeToString(&g);
+        options_.recorder(frame.t_sent_ns + offset, WireMessage::kVision, g);
+        senders_->next_geometry_ns = frame.t_sent_ns + 3'000'000'000LL;  // as the transport's geometry_interval
+      }
+      const CameraInfo* camera = nullptr;
+      for (const auto& c : senders_->geometry.cameras) {
+        if (c.id == frame.camera_id) camera = &c;
+      }
+      senders_->vision_clock->Update(world_.clock().time_ns());
+      std::string bytes;
+      ssl_vision::DetectionPacket(frame, *senders_->vision_clock, senders_->geometry.intrinsics, camera, {})
+          .SerializeToString(&bytes);
+      options_.recorder(frame.t_sent_ns + offset, WireMessage::kVision, bytes);
+    });
+  }
+}
+
+MatchSession::~MatchSession() {
+  if (options_.recorder) world_.SetVisionObserver(nullptr);
+}
+
+std::int64_t MatchSession::UnixOffset() {
+  if (!options_.unix_timestamps) return 0;
+  if (!unix_offset_ns_) {
+    // Anchored once: stamps keep the simulation's spacing exactly, also faster than real time.
+    const auto now = std::chrono::system_clock::now().time_since_epoch();
+    unix_offset_ns_ = std::chrono::duration_cast<std::chrono::nanoseconds>(now).count() - world_.clock().time_ns();
+  }
+  return *unix_offset_ns_;
+}
+
+std::vector<std::string> MatchSession::Endpoints() const {
+  std::vector<std::string> out;
+  if (senders_->referee) out.push_back("referee: " + senders_->referee->Describe());
+  if (senders_->tracker) out.push_back("tracker: " + senders_->tracker->Describe());
+  return out;
+}
+
+void MatchSession::Send(WireMessage type, const std::string& bytes, std::int64_t sim_ns) {
+  transport::MulticastSender* s = type == WireMessage::kReferee ? senders_->referee.get() : senders_->tracker.get();
+  if (s != nullptr) s->Send(Bytes(bytes));
+  if (options_.recorder) options_.recorder(sim_ns + UnixOffset(), type, bytes);
+}
+
+void MatchSession::AfterStep() {
+  const std::int64_t step = world_.clock().steps();
+  if (step == last_step_) return;
+  last_step_ = step;
+  const std::int64_t now = world_.clock().time_ns();
+  const bool referee_due = referee_ != nullptr;
+  const bool tracker_due = options_.tracker && now >= next_tracker_ns_;
+  if (!referee_due && !tracker_due) return;
+  const WorldSnapshot truth = world_.GroundTruth();
+  if (referee_) {
+    for (const FieldRequest& r : referee_->Update(ViewOf(truth))) {
+      PositionEvent e;
+      switch (r.kind) {
+        case FieldRequest::Kind::kPlaceBall:
+          e.target = Target::Ball();
+          e.position = Vec3(r.position.x, r.position.y, truth.ball.radius);
+          e.velocity = Vec3::Zero();
+          e.angular_velocity = Vec3::Zero();
+          log_.Info("referee places the ball at (" + std::to_string(r.position.x) + ", " + std::to_string(r.position.y) + ")");
+          break;
+        case FieldRequest::Kind::kTakeOff:
+          e.target = Target::Robot(r.robot);
+          e.present = false;
+          log_.Info("referee takes " + ToString(r.robot) + " off the field (yellow card)");
+          break;
+        case FieldRequest::Kind::kPutOn:
+          e.target = Target::Robot(r.robot);
+          e.present = true;
+          e.position = Vec3(r.position.x, r.position.y, 0);
+          e.velocity = Vec3::Zero();
+          log_.Info("referee puts " + ToString(r.robot) + " back on the field (card over)");
+          break;
+      }
+      world_.events().Post(std::move(e));
+    }
+    std::string bytes;
+    const auto commands = referee_->TakeCommandMessages();
+    for (const Referee& m : commands) {
+      m.SerializeToString(&bytes);
+      Send(WireMessage::kReferee, bytes, now);
+    }
+    if (!commands.empty() || now >= next_referee_ns_) {
+      if (commands.empty()) {
+        referee_->message().SerializeToString(&bytes);
+        Send(WireMessage::kReferee, bytes, now);
+      }
+      next_referee_ns_ = now + PeriodNs(options_.referee_rate);
+    }
+  }
+  if (tracker_due) {
+    std::string bytes;
+    TrackedPacket(truth, tracker_frame_++, UnixOffset(), {tracker_uuid_, "UberSim ground truth"}).SerializeToString(&bytes);
+    Send(WireMessage::kTracker, bytes, now);
+    next_tracker_ns_ = now + PeriodNs(options_.tracker_rate);
+  }
+}
+
+}  // namespace ubersim::match
