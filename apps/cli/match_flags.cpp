@@ -12,6 +12,8 @@ void MatchFlags::AddTo(po::options_description& desc) {
       ("referee", po::value<std::string>(&referee)->default_value("none"),
        "builtin: ÜberSim referees the match and publishes Referee messages on 224.5.23.1:10003 (docs/match.md); none")
       ("tracker", po::bool_switch(&tracker), "publish tracked vision (TrackerWrapperPacket) from the simulated truth on 224.5.23.2:10010")
+      ("referee-port", po::value<int>(&referee_port)->default_value(10003), "port of the Referee messages (group 224.5.23.1)")
+      ("tracker-port", po::value<int>(&tracker_port)->default_value(10010), "port of the tracked frames (group 224.5.23.2)")
       ("record", po::value<std::string>(&record),
        "write every vision, referee and tracker message to FILE in the league's log format (.gz: compressed)")
       ("half-duration", po::value<double>(&half_duration)->default_value(300.0), "playing time per half, s")
@@ -48,6 +50,11 @@ match::MatchOptions MatchFlags::Options(const kernel::WorldModel& model, bool lo
     c.yellow_can_place = c.blue_can_place = placement == "auto";
     o.referee = c;
   }
+  for (int port : {referee_port, tracker_port}) {
+    if (port < 1 || port > 65535) throw UsageError("--referee-port and --tracker-port take 1..65535, not " + std::to_string(port));
+  }
+  o.referee_port = static_cast<std::uint16_t>(referee_port);
+  o.tracker_port = static_cast<std::uint16_t>(tracker_port);
   o.tracker = tracker;
   o.local_only = local_only;
   if (!record.empty()) {

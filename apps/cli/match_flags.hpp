@@ -25,6 +25,8 @@ struct MatchFlags {
   std::string first_kickoff = "yellow";
   std::string yellow_name = "Yellow", blue_name = "Blue";
   int yellow_keeper = 0, blue_keeper = 0;
+  int referee_port = 10003;        ///< --referee-port
+  int tracker_port = 10010;        ///< --tracker-port
   std::string placement = "auto";  ///< who places the ball: auto (teams, the simulator when they do not), simulator
 
   /// Adds the options to `desc`.
