@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "delimited.hpp"
+#include "transport_common/delimited.hpp"
 #include "error_codes.hpp"
 #include "mapping.hpp"
 #include "ssl_simulation_custom_ubersim.pb.h"
@@ -17,6 +17,8 @@
 
 // Inside the project's namespace: the wire messages' global Team and RobotId must not win lookup.
 namespace ubersim::ssl_simulation {
+using transport::DelimitedDecoder;
+using transport::EncodeDelimited;
 namespace {
 
 // Blue and yellow robots 0..5 are on the field; 6 and 7 in the world but off it.

@@ -8,12 +8,14 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/write.hpp>
 
-#include "delimited.hpp"
+#include "transport_common/delimited.hpp"
 #include "mapping.hpp"
 
 namespace ubersim::ssl_simulation {
 
 namespace asio = boost::asio;
+using transport::DelimitedDecoder;
+using transport::EncodeDelimited;
 using asio::ip::tcp;
 
 /// One client: reads frames, hands each request to the worker, writes the reply, reads on.

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-namespace ubersim::ssl_simulation {
+namespace ubersim::transport {
 
 /// Splits a byte stream into messages. Feed it what the socket delivered, then take messages
 /// until it needs more. An error is final: the stream is out of step and must be closed.
@@ -35,4 +35,4 @@ class DelimitedDecoder {
 /// `payload` with its varint length in front.
 std::string EncodeDelimited(std::string_view payload);
 
-}  // namespace ubersim::ssl_simulation
+}  // namespace ubersim::transport

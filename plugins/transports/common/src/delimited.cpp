@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "delimited.hpp"
+#include "transport_common/delimited.hpp"
 
 #include <cstdint>
 
-namespace ubersim::ssl_simulation {
+namespace ubersim::transport {
 
 namespace {
 // A 32-bit length takes at most 5 varint bytes; anything longer cannot be a sane prefix.
@@ -60,4 +60,4 @@ std::string EncodeDelimited(std::string_view payload) {
   return out;
 }
 
-}  // namespace ubersim::ssl_simulation
+}  // namespace ubersim::transport
