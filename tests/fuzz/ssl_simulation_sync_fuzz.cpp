@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-#include "delimited.hpp"
+#include "transport_common/delimited.hpp"
 #include "fuzz_checks.hpp"
 #include "mapping.hpp"
 #include "ssl_simulation_fixture.hpp"
@@ -27,7 +27,7 @@ using ubersim::fuzz::Check;
 // a framing error.
 template <typename Chunk>
 std::vector<std::string> Frames(std::string_view stream, Chunk chunk, bool& failed) {
-  ssl::DelimitedDecoder decoder(ubersim::fuzz::kMaxMessage);
+  ubersim::transport::DelimitedDecoder decoder(ubersim::fuzz::kMaxMessage);
   std::vector<std::string> frames;
   failed = false;
   std::size_t at = 0;
@@ -38,12 +38,12 @@ std::vector<std::string> Frames(std::string_view stream, Chunk chunk, bool& fail
     for (;;) {
       std::string message, error;
       const auto status = decoder.Next(message, error);
-      if (status == ssl::DelimitedDecoder::Status::kNeedMore) break;
-      if (status == ssl::DelimitedDecoder::Status::kError) {
+      if (status == ubersim::transport::DelimitedDecoder::Status::kNeedMore) break;
+      if (status == ubersim::transport::DelimitedDecoder::Status::kError) {
         Check(!error.empty(), "a framing error without a reason");
         // Final: asking again gives the same error.
         std::string again;
-        Check(decoder.Next(message, again) == ssl::DelimitedDecoder::Status::kError && again == error,
+        Check(decoder.Next(message, again) == ubersim::transport::DelimitedDecoder::Status::kError && again == error,
               "a framing error is not final");
         failed = true;
         break;
@@ -76,10 +76,10 @@ bool Handle(const std::string& frame) {
   ssl::AppendErrors(errors, response.mutable_robot_control_response()->mutable_errors());
   // The reply goes back framed; reading it back must give the same bytes.
   const std::string payload = response.SerializeAsString();
-  ssl::DelimitedDecoder echo(std::max(ubersim::fuzz::kMaxMessage, payload.size()));
-  echo.Append(ssl::EncodeDelimited(payload));
+  ubersim::transport::DelimitedDecoder echo(std::max(ubersim::fuzz::kMaxMessage, payload.size()));
+  echo.Append(ubersim::transport::EncodeDelimited(payload));
   std::string back, error;
-  Check(echo.Next(back, error) == ssl::DelimitedDecoder::Status::kMessage && back == payload,
+  Check(echo.Next(back, error) == ubersim::transport::DelimitedDecoder::Status::kMessage && back == payload,
         "a framed reply does not read back");
   return true;
 }
