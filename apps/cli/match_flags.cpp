@@ -10,7 +10,10 @@ namespace po = boost::program_options;
 void MatchFlags::AddTo(po::options_description& desc) {
   desc.add_options()
       ("referee", po::value<std::string>(&referee)->default_value("none"),
-       "builtin: ÜberSim referees the match and publishes Referee messages on 224.5.23.1:10003 (docs/match.md); none")
+       "builtin: ÜberSim referees the match and publishes Referee messages on 224.5.23.1:10003; gc: ÜberSim is the "
+       "autoreferee of a game controller in CI mode (--game-controller) and publishes its messages; none (docs/match.md)")
+      ("game-controller", po::value<std::string>(&game_controller)->default_value("localhost:10009"),
+       "HOST:PORT of ssl-game-controller -timeAcquisitionMode ci (with --referee gc)")
       ("tracker", po::bool_switch(&tracker), "publish tracked vision (TrackerWrapperPacket) from the simulated truth on 224.5.23.2:10010")
       ("referee-port", po::value<int>(&referee_port)->default_value(10003), "port of the Referee messages (group 224.5.23.1)")
       ("tracker-port", po::value<int>(&tracker_port)->default_value(10010), "port of the tracked frames (group 224.5.23.2)")
@@ -30,13 +33,13 @@ void MatchFlags::AddTo(po::options_description& desc) {
 match::MatchOptions MatchFlags::Options(const kernel::WorldModel& model, bool local_only,
                                         std::unique_ptr<sslog::LogWriter>& writer) const {
   match::MatchOptions o;
-  if (referee != "none" && referee != "builtin") {
-    throw UsageError("--referee " + referee + ": builtin or none");
+  if (referee != "none" && referee != "builtin" && referee != "gc") {
+    throw UsageError("--referee " + referee + ": builtin, gc or none");
   }
   if (first_kickoff != "yellow" && first_kickoff != "blue") throw UsageError("--first-kickoff " + first_kickoff + ": yellow or blue");
   if (placement != "auto" && placement != "simulator") throw UsageError("--placement " + placement + ": auto or simulator");
   if (!(half_duration > 0) || !(half_time_break >= 0)) throw UsageError("--half-duration must be > 0 and --half-time-break >= 0");
-  if (referee == "builtin") {
+  if (referee == "builtin" || referee == "gc") {
     match::RefereeConfig c;
     // Div B's field is 9 × 6 m: its robot limit and time limits follow.
     c.division = model.field->geometry.field_length < 10.5 ? match::Division::kB : match::Division::kA;
@@ -49,6 +52,7 @@ match::MatchOptions MatchFlags::Options(const kernel::WorldModel& model, bool lo
     c.blue_keeper = blue_keeper;
     c.yellow_can_place = c.blue_can_place = placement == "auto";
     o.referee = c;
+    if (referee == "gc") o.game_controller = game_controller;
   }
   for (int port : {referee_port, tracker_port}) {
     if (port < 1 || port > 65535) throw UsageError("--referee-port and --tracker-port take 1..65535, not " + std::to_string(port));

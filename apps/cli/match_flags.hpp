@@ -17,7 +17,8 @@ namespace ubersim::cli {
 
 /// What the command line says about the match.
 struct MatchFlags {
-  std::string referee = "none";   ///< none or builtin
+  std::string referee = "none";   ///< none, builtin or gc
+  std::string game_controller = "localhost:10009";  ///< --game-controller HOST:PORT (CI mode)
   bool tracker = false;           ///< --tracker
   std::string record;             ///< --record FILE
   double half_duration = 300.0;   ///< s

@@ -162,6 +162,7 @@ int Step(World& world, const WorldModel& model, const fs::path& world_file, cons
   if (f.match.Any()) {
     session = std::make_unique<match::MatchSession>(world, f.match.Options(model, f.overrides.local_only, record), log);
     for (const auto& e : session->Endpoints()) std::cerr << "ubersim: publishing " << e << "\n";
+    if (!session->GameController().empty()) std::cerr << "ubersim: refereed by " << session->GameController() << "\n";
     if (record) std::cerr << "ubersim: recording to " << record->Path() << "\n";
   }
   ProgressLine status(/*shown=*/vm.count("quiet") == 0);

@@ -6,6 +6,7 @@
 #include <span>
 #include <stdexcept>
 
+#include "game_controller_link.hpp"
 #include "tracker_packets.hpp"
 #include "transport_common/multicast_sender.hpp"
 #include "transport_common/wire_clock.hpp"
@@ -44,11 +45,13 @@ MatchSession::MatchSession(kernel::World& world, MatchOptions options, Log& log)
   };
   if (options_.referee) {
     const WorldSnapshot truth = world_.GroundTruth();
-    referee_ = std::make_unique<RefereeEngine>(*options_.referee, *truth.field, UnixOffset());
+    const RefereeMode mode = options_.game_controller.empty() ? RefereeMode::kGameController : RefereeMode::kAutoref;
+    referee_ = std::make_unique<RefereeEngine>(*options_.referee, *truth.field, UnixOffset(), mode);
+    if (mode == RefereeMode::kAutoref) link_ = std::make_unique<GameControllerLink>(options_.game_controller);
     if (options_.network) senders_->referee = sender(options_.referee_address, options_.referee_port, "referee");
   }
+  tracker_uuid_ = UuidFromSeed(world_.model().seed);
   if (options_.tracker) {
-    tracker_uuid_ = UuidFromSeed(world_.model().seed);
     if (options_.network) senders_->tracker = sender(options_.tracker_address, options_.tracker_port, "tracker");
   }
   if (options_.recorder) {
@@ -95,6 +98,8 @@ std::int64_t MatchSession::UnixOffset() {
   return *unix_offset_ns_;
 }
 
+std::string MatchSession::GameController() const { return link_ ? link_->Describe() : std::string(); }
+
 std::vector<std::string> MatchSession::Endpoints() const {
   std::vector<std::string> out;
   if (senders_->referee) out.push_back("referee: " + senders_->referee->Describe());
@@ -108,6 +113,85 @@ void MatchSession::Send(WireMessage type, const std::string& bytes, std::int64_t
   if (options_.recorder) options_.recorder(sim_ns + UnixOffset(), type, bytes);
 }
 
+void MatchSession::Carry(const std::vector<FieldRequest>& requests, const WorldSnapshot& truth) {
+  for (const FieldRequest& r : requests) {
+    PositionEvent e;
+    switch (r.kind) {
+      case FieldRequest::Kind::kPlaceBall:
+        e.target = Target::Ball();
+        e.position = Vec3(r.position.x, r.position.y, truth.ball.radius);
+        e.velocity = Vec3::Zero();
+        e.angular_velocity = Vec3::Zero();
+        log_.Info("referee places the ball at (" + std::to_string(r.position.x) + ", " + std::to_string(r.position.y) + ")");
+        break;
+      case FieldRequest::Kind::kTakeOff:
+        e.target = Target::Robot(r.robot);
+        e.present = false;
+        log_.Info("referee takes " + ToString(r.robot) + " off the field (yellow card)");
+        break;
+      case FieldRequest::Kind::kPutOn:
+        e.target = Target::Robot(r.robot);
+        e.present = true;
+        e.position = Vec3(r.position.x, r.position.y, 0);
+        e.velocity = Vec3::Zero();
+        log_.Info("referee puts " + ToString(r.robot) + " back on the field (card over)");
+        break;
+    }
+    world_.events().Post(std::move(e));
+  }
+}
+
+namespace {
+
+// The GC-internal command of a Referee command the CI client asks for (only STOP is needed).
+Command GcCommand(Referee::Command c) {
+  Command out;
+  out.set_type(c == Referee::HALT ? Command::HALT : Command::STOP);
+  out.set_for_team(::UNKNOWN);
+  return out;
+}
+
+}  // namespace
+
+void MatchSession::ExchangeWithGameController(const WorldSnapshot& truth, std::int64_t now) {
+  CiInput in;
+  in.set_timestamp(now + UnixOffset());
+  *in.mutable_tracker_packet() = TrackedPacket(truth, ci_frame_++, UnixOffset(), {tracker_uuid_, "UberSim ground truth"});
+  if (!ci_started_) {
+    // The field once, and the engine's events accepted without a human (behaviour ACCEPT, §1.6).
+    ssl_vision::GeometryInputs g;
+    g.field = *truth.field;
+    g.ball_radius = truth.ball.radius;
+    for (const auto& c : world_.perception().cameras) g.cameras.push_back({c.id, c.position});
+    *in.mutable_geometry() = ssl_vision::GeometryPacket(g).geometry();
+    Input* config = in.add_api_inputs();
+    for (const char* type : {"BALL_LEFT_FIELD_TOUCH_LINE", "BALL_LEFT_FIELD_GOAL_LINE", "POSSIBLE_GOAL",
+                             "PLACEMENT_SUCCEEDED", "BOT_TOO_FAST_IN_STOP", "DEFENDER_TOO_CLOSE_TO_KICK_POINT"}) {
+      (*config->mutable_config_delta()->mutable_game_event_behavior())[type] = Config::BEHAVIOR_ACCEPT;
+    }
+    ci_started_ = true;
+  }
+  for (GameEvent& e : referee_->TakeGameEvents()) {
+    *in.add_api_inputs()->mutable_change()->mutable_add_game_event_change()->mutable_game_event() = std::move(e);
+  }
+  for (const ControlRequest& r : referee_->TakeControlRequests()) {
+    Input* input = in.add_api_inputs();
+    if (r.command) *input->mutable_change()->mutable_new_command_change()->mutable_command() = GcCommand(*r.command);
+    if (r.stage) input->mutable_change()->mutable_change_stage_change()->set_new_stage(*r.stage);
+    if (r.accept_goal) {
+      input->mutable_continue_action()->set_type(ContinueAction::ACCEPT_GOAL);
+      input->mutable_continue_action()->set_for_team(WireTeam(r.for_team));
+    }
+  }
+  const std::vector<Referee> answers = link_->Exchange(in);
+  std::string bytes;
+  for (const Referee& m : answers) {
+    m.SerializeToString(&bytes);
+    Send(WireMessage::kReferee, bytes, now);
+  }
+  referee_->Follow(answers.back());
+}
+
 void MatchSession::AfterStep() {
   const std::int64_t step = world_.clock().steps();
   if (step == last_step_) return;
@@ -118,31 +202,14 @@ void MatchSession::AfterStep() {
   if (!referee_due && !tracker_due) return;
   const WorldSnapshot truth = world_.GroundTruth();
   if (referee_) {
-    for (const FieldRequest& r : referee_->Update(ViewOf(truth))) {
-      PositionEvent e;
-      switch (r.kind) {
-        case FieldRequest::Kind::kPlaceBall:
-          e.target = Target::Ball();
-          e.position = Vec3(r.position.x, r.position.y, truth.ball.radius);
-          e.velocity = Vec3::Zero();
-          e.angular_velocity = Vec3::Zero();
-          log_.Info("referee places the ball at (" + std::to_string(r.position.x) + ", " + std::to_string(r.position.y) + ")");
-          break;
-        case FieldRequest::Kind::kTakeOff:
-          e.target = Target::Robot(r.robot);
-          e.present = false;
-          log_.Info("referee takes " + ToString(r.robot) + " off the field (yellow card)");
-          break;
-        case FieldRequest::Kind::kPutOn:
-          e.target = Target::Robot(r.robot);
-          e.present = true;
-          e.position = Vec3(r.position.x, r.position.y, 0);
-          e.velocity = Vec3::Zero();
-          log_.Info("referee puts " + ToString(r.robot) + " back on the field (card over)");
-          break;
-      }
-      world_.events().Post(std::move(e));
+    Carry(referee_->Update(ViewOf(truth)), truth);
+  }
+  if (link_) {
+    if (now >= next_ci_ns_) {
+      ExchangeWithGameController(truth, now);
+      next_ci_ns_ = now + PeriodNs(options_.ci_rate);
     }
+  } else if (referee_) {
     std::string bytes;
     const auto commands = referee_->TakeCommandMessages();
     for (const Referee& m : commands) {

@@ -28,7 +28,11 @@ using MessageRecorder = std::function<void(std::int64_t unix_ns, WireMessage typ
 
 /// How a session runs.
 struct MatchOptions {
-  std::optional<RefereeConfig> referee;  ///< the built-in referee; none: no referee
+  std::optional<RefereeConfig> referee;  ///< the referee's rules; none: no referee
+  /// "HOST:PORT" of a game controller in CI mode: the referee is its autoreferee and publishes its
+  /// Referee messages; empty: the referee is the built-in game controller.
+  std::string game_controller;
+  double ci_rate = 100.0;                ///< CiInputs per simulated second
   bool tracker = false;                  ///< publish TrackerWrapperPackets
   double referee_rate = 40.0;            ///< Referee messages per simulated second, besides one per command
   double tracker_rate = 60.0;            ///< tracked frames per simulated second
@@ -57,12 +61,16 @@ class MatchSession {
   void AfterStep();
   /// The built-in referee, or null.
   const RefereeEngine* referee() const { return referee_.get(); }
+  /// The game controller link's description, or "".
+  std::string GameController() const;
   /// "referee udp multicast 224.5.23.1:10003 via …", one line per sender.
   std::vector<std::string> Endpoints() const;
 
  private:
   struct Senders;
   void Send(WireMessage type, const std::string& bytes, std::int64_t sim_ns);
+  void Carry(const std::vector<FieldRequest>& requests, const WorldSnapshot& truth);
+  void ExchangeWithGameController(const WorldSnapshot& truth, std::int64_t now);
   std::int64_t UnixOffset();
 
   kernel::World& world_;
@@ -70,6 +78,10 @@ class MatchSession {
   Log& log_;
   std::unique_ptr<RefereeEngine> referee_;
   std::unique_ptr<Senders> senders_;
+  std::unique_ptr<class GameControllerLink> link_;
+  std::int64_t next_ci_ns_ = 0;
+  std::uint32_t ci_frame_ = 0;
+  bool ci_started_ = false;
   std::int64_t last_step_ = -1;
   std::int64_t next_referee_ns_ = 0;
   std::int64_t next_tracker_ns_ = 0;

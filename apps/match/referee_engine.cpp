@@ -63,8 +63,9 @@ Vector2* Set(Vector2* v, P2 p) {
 
 ::Team WireTeam(Team t) { return t == Team::kBlue ? ::BLUE : ::YELLOW; }
 
-RefereeEngine::RefereeEngine(const RefereeConfig& config, const FieldGeometry& field, std::int64_t unix_offset_ns)
-    : config_(config), rules_(field), unix_offset_ns_(unix_offset_ns) {
+RefereeEngine::RefereeEngine(const RefereeConfig& config, const FieldGeometry& field, std::int64_t unix_offset_ns,
+                             RefereeMode mode)
+    : config_(config), mode_(mode), rules_(field), unix_offset_ns_(unix_offset_ns) {
   const bool a = config_.division == Division::kA;
   const unsigned robots = a ? 11 : 6;
   for (Team t : {Team::kYellow, Team::kBlue}) {
@@ -131,7 +132,6 @@ void RefereeEngine::Issue(Referee::Command command, std::int64_t t_ns) {
   msg_.set_command_counter(msg_.command_counter() + 1);
   msg_.set_command_timestamp(Micros(t_ns));
   msg_.set_packet_timestamp(Micros(t_ns));
-  t_command_ns_ = t_ns;
   const bool a = config_.division == Division::kA;
   double action = 0;
   if (IsPlacement(command)) action = config_.placement_time;
@@ -143,15 +143,65 @@ void RefereeEngine::Issue(Referee::Command command, std::int64_t t_ns) {
     msg_.clear_designated_position();
     msg_.clear_next_command();
     msg_.clear_game_events();
+  }
+  OnCommand(command, t_ns);
+  command_messages_.push_back(msg_);
+}
+
+// What a new command means for the watching (both modes: the built-in referee's own commands and
+// the game controller's).
+void RefereeEngine::OnCommand(Referee::Command command, std::int64_t t_ns) {
+  t_command_ns_ = t_ns;
+  reported_ = false;
+  control_requested_ = false;
+  if (IsRunning(command)) {
     in_play_ = command == Referee::FORCE_START;
+    if (autoref()) {
+      kick_point_ = last_ball_;
+      // The team taking the restart touches first: the kick-off's (the previous command) or the free kick's.
+      if (IsDirect(command)) last_touch_team_ = TeamOf(command);
+      if (command == Referee::NORMAL_START && IsKickoff(previous_command_)) last_touch_team_ = TeamOf(previous_command_);
+      last_touch_bot_ = -1;
+    }
     progress_point_ = kick_point_;
     t_progress_ns_ = t_ns;
   }
-  if (command == Referee::STOP || command == Referee::HALT || IsPlacement(command)) {
-    if (!IsPlacement(command)) t_stop_ns_ = t_ns;
+  if (command == Referee::STOP || command == Referee::HALT) {
+    t_stop_ns_ = t_ns;
+    in_play_ = false;
     stop_speed_fouled_.clear();
   }
-  command_messages_.push_back(msg_);
+  if (IsPlacement(command)) {
+    in_play_ = false;
+    if (autoref()) {
+      placing_team_ = TeamOf(command);
+      t_placement_ns_ = t_ns;
+      const P2 target{msg_.designated_position().x() / 1000.0, msg_.designated_position().y() / 1000.0};
+      placement_best_ = Dist(last_ball_, target);
+      t_placement_progress_ns_ = t_ns;
+    }
+  }
+  previous_command_ = command;
+}
+
+void RefereeEngine::Follow(const Referee& gc) {
+  const bool new_command = !followed_ || gc.command_counter() != msg_.command_counter() || gc.command() != msg_.command();
+  if (!followed_ || gc.stage() != msg_.stage()) stage_requested_ = false;
+  msg_ = gc;
+  followed_ = true;
+  if (new_command) OnCommand(gc.command(), t_last_ns_);
+}
+
+std::vector<GameEvent> RefereeEngine::TakeGameEvents() {
+  std::vector<GameEvent> out;
+  out.swap(events_out_);
+  return out;
+}
+
+std::vector<ControlRequest> RefereeEngine::TakeControlRequests() {
+  std::vector<ControlRequest> out;
+  out.swap(control_out_);
+  return out;
 }
 
 void RefereeEngine::Stop(std::int64_t t_ns, std::optional<Referee::Command> next, std::optional<P2> designated) {
@@ -172,6 +222,12 @@ void RefereeEngine::Stop(std::int64_t t_ns, std::optional<Referee::Command> next
 
 void RefereeEngine::AddEvent(GameEvent event) {
   event.add_origin("UberSim");
+  if (autoref()) {
+    // The game controller fills in id and time stamp itself (§1.6).
+    events_out_.push_back(event);
+    history_.push_back(std::move(event));
+    return;
+  }
   event.set_created_timestamp(Micros(t_last_ns_));
   event.set_id(std::to_string(history_.size() + 1));
   *msg_.add_game_events() = event;
@@ -248,9 +304,14 @@ std::vector<FieldRequest> RefereeEngine::Update(const FieldView& v) {
   }
   const std::int64_t dt = std::max<std::int64_t>(0, v.t_ns - t_last_ns_);
   t_last_ns_ = v.t_ns;
+  last_ball_ = v.ball;
+  TrackTouches(v);
+  if (autoref()) {
+    Autoref(v, out);
+    return out;
+  }
   msg_.set_packet_timestamp(Micros(v.t_ns));
   CountDown(dt);
-  TrackTouches(v);
   if (finished()) return out;
 
   // A half ends on time (the game controller leaves this to a human; nobody else is here).
@@ -310,9 +371,28 @@ void RefereeEngine::WatchKickTaken(const FieldView& v) {
 
 void RefereeEngine::WatchRunning(const FieldView& v, std::vector<FieldRequest>& out) {
   (void)out;
+  if (autoref() && reported_) return;  // reported once; the game controller decides
   if (const auto exit = rules_.Left(v.ball, v.ball_radius, v.ball_z)) {
     const Team toucher = last_touch_team_;
     GameEvent e;
+    if (exit->kind == Exit::kGoal && autoref()) {
+      // An autoreferee reports a possible goal; the game controller judges and scores it.
+      const Team conceding = GoalSideOf(Team::kBlue) == exit->goal_side ? Team::kBlue : Team::kYellow;
+      const Team scoring = Other(conceding);
+      int on_field = 0;
+      for (const RobotView& r : v.robots) on_field += r.present && r.id.team == scoring;
+      e.set_type(GameEvent::POSSIBLE_GOAL);
+      GameEvent::Goal* g = e.mutable_possible_goal();
+      g->set_by_team(WireTeam(scoring));
+      g->set_kicking_team(WireTeam(toucher));
+      if (last_touch_bot_ >= 0) g->set_kicking_bot(static_cast<unsigned>(last_touch_bot_));
+      Set(g->mutable_location(), exit->location);
+      g->set_max_ball_height(static_cast<float>(max_height_since_touch_[TeamIndex(scoring)]));
+      g->set_num_robots_by_team(static_cast<unsigned>(on_field));
+      AddEvent(e);
+      reported_ = true;
+      return;
+    }
     if (exit->kind == Exit::kGoal) {
       // The ball entered the goal at x sign goal_side: the team defending it concedes.
       const Team conceding = GoalSideOf(Team::kBlue) == exit->goal_side ? Team::kBlue : Team::kYellow;
@@ -369,14 +449,19 @@ void RefereeEngine::WatchRunning(const FieldView& v, std::vector<FieldRequest>& 
       Set(b->mutable_location(), as_line.location);
       AddEvent(e);
     }
+    if (autoref()) {
+      reported_ = true;
+      return;
+    }
     // The team that did not touch it last takes the free kick (§3.3).
     const Team kicker = Other(toucher);
     const bool corner = as_line.kind == Exit::kGoalLine && GoalSideOf(toucher) == as_line.goal_side;
     Stop(v.t_ns, Direct(kicker), rules_.PlacementAfter(as_line, corner));
     return;
   }
-  // No progress: the ball moved less than 0.1 m for 5 s (A) / 10 s (B) while both may play.
-  if (!in_play_) return;
+  // No progress: the ball moved less than 0.1 m for 5 s (A) / 10 s (B) while both may play (the
+  // game controller detects it itself).
+  if (!in_play_ || autoref()) return;
   if (Dist(v.ball, progress_point_) >= kNoProgressDistance) {
     progress_point_ = v.ball;
     t_progress_ns_ = v.t_ns;
@@ -505,6 +590,7 @@ void RefereeEngine::WatchPlacement(const FieldView& v, std::vector<FieldRequest>
     if (r.present) nearest = std::min(nearest, Dist(r.pos, v.ball) - r.radius - v.ball_radius);
   }
   const double clearance = msg_.next_command() == Referee::FORCE_START ? kStopDistance : kPlacementRobotClearance;
+  if (autoref() && reported_) return;
   if (d <= config_.placement_tolerance && Speed(v.ball_vel) < kSteadySpeed && nearest >= clearance) {
     GameEvent e;
     e.set_type(GameEvent::PLACEMENT_SUCCEEDED);
@@ -513,6 +599,10 @@ void RefereeEngine::WatchPlacement(const FieldView& v, std::vector<FieldRequest>
     s->set_time_taken(static_cast<float>(Seconds(v.t_ns - t_placement_ns_)));
     s->set_precision(static_cast<float>(d));
     AddEvent(e);
+    if (autoref()) {
+      reported_ = true;  // the game controller stops and counts
+      return;
+    }
     auto& info = Info(placing_team_);
     info.set_ball_placement_failures(info.ball_placement_failures() > 0 ? info.ball_placement_failures() - 1 : 0);
     in_play_ = false;
@@ -520,7 +610,7 @@ void RefereeEngine::WatchPlacement(const FieldView& v, std::vector<FieldRequest>
     t_stop_ns_ = t_placement_ns_;  // resuming counts from the placement command
     return;
   }
-  if (msg_.current_action_time_remaining() < 0) {
+  if (!autoref() && msg_.current_action_time_remaining() < 0) {
     GameEvent e;
     e.set_type(GameEvent::PLACEMENT_FAILED);
     e.mutable_placement_failed()->set_by_team(WireTeam(placing_team_));
@@ -546,6 +636,10 @@ void RefereeEngine::WatchPlacement(const FieldView& v, std::vector<FieldRequest>
   // A team that does not place: the simulator does, as the field's referee would.
   if (Seconds(v.t_ns - t_placement_progress_ns_) >= config_.referee_places_after) {
     RefereePlaces(target, v.t_ns, out);
+    if (autoref()) {
+      t_placement_progress_ns_ = v.t_ns;  // the placed ball is then reported as placed
+      return;
+    }
     placement_attempts_ = 2;  // placed by the referee: nobody places again in this stoppage
     Issue(Referee::STOP, v.t_ns);
     t_stop_ns_ = t_placement_ns_;
@@ -554,6 +648,7 @@ void RefereeEngine::WatchPlacement(const FieldView& v, std::vector<FieldRequest>
 
 void RefereeEngine::Foul(Team team, GameEvent event, std::vector<FieldRequest>& out, const FieldView& v) {
   AddEvent(event);
+  if (autoref()) return;  // the game controller counts fouls and gives cards
   auto& info = Info(team);
   info.set_foul_counter(info.foul_counter() + 1);
   if (config_.fouls_per_card > 0 && info.foul_counter() % static_cast<unsigned>(config_.fouls_per_card) == 0) {
@@ -624,10 +719,13 @@ void RefereeEngine::WatchCards(const FieldView& v, std::vector<FieldRequest>& ou
       if (left > 0) active.push_back(left);
     }
     std::sort(active.begin(), active.end());
-    times->Clear();
-    for (auto left : active) times->Add(left);
-    const unsigned allowed = limit - std::min<unsigned>(limit, static_cast<unsigned>(active.size()) + info.red_cards());
-    info.set_max_allowed_bots(allowed);
+    unsigned allowed = info.max_allowed_bots();  // the game controller's, when following one
+    if (!autoref()) {
+      times->Clear();
+      for (auto left : active) times->Add(left);
+      allowed = limit - std::min<unsigned>(limit, static_cast<unsigned>(active.size()) + info.red_cards());
+      info.set_max_allowed_bots(allowed);
+    }
     // The simulator takes a robot off for each card (the highest id that is not the keeper), as
     // the team would within its 10 s, and puts it back where the halfway line meets the touch
     // line when the card is over.
@@ -660,6 +758,71 @@ void RefereeEngine::WatchCards(const FieldView& v, std::vector<FieldRequest>& ou
       off.erase(off.begin());
     }
   }
+}
+
+void RefereeEngine::Autoref(const FieldView& v, std::vector<FieldRequest>& out) {
+  if (!followed_) return;  // nothing heard from the game controller yet
+  const Referee::Stage stage = msg_.stage();
+  const Referee::Command c = msg_.command();
+  // The stage does not advance by itself in the game controller (§2.1): ask for the next one.
+  if (!stage_requested_) {
+    std::optional<Referee::Stage> next;
+    if ((stage == Referee::NORMAL_FIRST_HALF || stage == Referee::NORMAL_SECOND_HALF) && msg_.stage_time_left() <= 0) {
+      next = stage == Referee::NORMAL_FIRST_HALF ? Referee::NORMAL_HALF_TIME : Referee::POST_GAME;
+    } else if (stage == Referee::NORMAL_HALF_TIME && msg_.stage_time_left() <= 0) {
+      next = Referee::NORMAL_SECOND_HALF_PRE;
+    }
+    if (next) {
+      ControlRequest r;
+      r.stage = next;
+      control_out_.push_back(r);
+      stage_requested_ = true;
+      return;
+    }
+  }
+  if (stage == Referee::POST_GAME) return;
+  const bool next_is_kickoff = msg_.has_next_command() &&
+                               (IsKickoff(msg_.next_command()) || msg_.next_command() == Referee::PREPARE_PENALTY_BLUE ||
+                                msg_.next_command() == Referee::PREPARE_PENALTY_YELLOW);
+  // The referee's hands: the ball to the centre (or the mark) for kick-offs and penalties.
+  if ((c == Referee::STOP || c == Referee::HALT || IsKickoff(c)) && msg_.has_designated_position() &&
+      (next_is_kickoff || IsKickoff(c)) && PlacementNeeded(v, true) &&
+      Seconds(v.t_ns - t_command_ns_) >= config_.resume_after_halt &&
+      (t_referee_placed_ns_ < 0 || Seconds(v.t_ns - t_referee_placed_ns_) > 1.0)) {
+    const P2 target{msg_.designated_position().x() / 1000.0, msg_.designated_position().y() / 1000.0};
+    RefereePlaces(target, v.t_ns, out);
+  }
+  if (c == Referee::HALT && !control_requested_ && !IsBreak(stage) &&
+      Seconds(v.t_ns - t_command_ns_) >= config_.resume_after_halt) {
+    // HALT ends with STOP (auto-continue never leaves HALT); a goal the game controller halted
+    // for is accepted first, as an operator would.
+    bool possible = false, decided = false;
+    Team scorer = Team::kYellow;
+    for (const GameEvent& e : msg_.game_events()) {
+      if (e.type() == GameEvent::POSSIBLE_GOAL) {
+        possible = true;
+        scorer = e.possible_goal().by_team() == ::BLUE ? Team::kBlue : Team::kYellow;
+      }
+      decided = decided || e.type() == GameEvent::GOAL || e.type() == GameEvent::INVALID_GOAL;
+    }
+    ControlRequest r;
+    if (possible && !decided) {
+      r.accept_goal = true;
+      r.for_team = scorer;
+    } else {
+      r.command = Referee::STOP;
+    }
+    control_out_.push_back(r);
+    control_requested_ = true;
+  }
+  if (IsRunning(c)) {
+    WatchKickTaken(v);
+    WatchRunning(v, out);
+  } else if (IsPlacement(c)) {
+    WatchPlacement(v, out);
+  }
+  WatchFouls(v, out);
+  WatchCards(v, out);
 }
 
 }  // namespace ubersim::match

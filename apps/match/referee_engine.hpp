@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,12 +57,35 @@ struct FieldRequest {
   RobotId robot;   ///< kTakeOff, kPutOn: which robot
 };
 
-/// The built-in referee (a game controller and an autoreferee in one).
+/// What the engine plays: the whole game controller (built-in referee) or the autoreferee of a
+/// real game controller, whose Referee messages it follows (Follow) and to which it reports.
+enum class RefereeMode { kGameController, kAutoref };
+
+/// What an autoreferee asks of the game controller besides its game events (the field's side of a
+/// match: resuming after HALT, advancing the stage, accepting a goal).
+struct ControlRequest {
+  std::optional<Referee::Command> command;  ///< a new command (STOP)
+  std::optional<Referee::Stage> stage;      ///< the next stage
+  bool accept_goal = false;                 ///< accept the possible goal the game controller halted for
+  Team for_team = Team::kYellow;            ///< accept_goal: the scoring team
+};
+
+/// The referee's rule engine: detects what the league's autoreferees detect, and (as the built-in
+/// referee) decides what the game controller decides.
 class RefereeEngine {
  public:
   /// A match on `field` under `config`; `unix_offset_ns` turns simulated time into the Unix time
   /// stamps the messages carry (0: plain simulated time).
-  RefereeEngine(const RefereeConfig& config, const FieldGeometry& field, std::int64_t unix_offset_ns = 0);
+  RefereeEngine(const RefereeConfig& config, const FieldGeometry& field, std::int64_t unix_offset_ns = 0,
+                RefereeMode mode = RefereeMode::kGameController);
+
+  /// kAutoref: takes the game controller's latest message as the state (its command, stage,
+  /// placement position and teams).
+  void Follow(const Referee& game_controller);
+  /// kAutoref: the game events detected since the last call, for the game controller.
+  std::vector<GameEvent> TakeGameEvents();
+  /// kAutoref: what the game controller is asked to do since the last call.
+  std::vector<ControlRequest> TakeControlRequests();
 
   /// Watches the field at `view.t_ns` (never earlier than the last call) and returns what the
   /// field must do now.
@@ -80,6 +104,9 @@ class RefereeEngine {
  private:
 
   void Issue(Referee::Command command, std::int64_t t_ns);
+  void OnCommand(Referee::Command command, std::int64_t t_ns);
+  void Autoref(const FieldView& v, std::vector<FieldRequest>& out);
+  bool autoref() const { return mode_ == RefereeMode::kAutoref; }
   void Stop(std::int64_t t_ns, std::optional<Referee::Command> next, std::optional<P2> designated);
   void AddEvent(GameEvent event);
   void SetStage(Referee::Stage stage, std::int64_t t_ns);
@@ -104,6 +131,7 @@ class RefereeEngine {
   double Seconds(std::int64_t t_ns) const { return static_cast<double>(t_ns) * 1e-9; }
 
   RefereeConfig config_;
+  RefereeMode mode_;
   FieldRules rules_;
   std::int64_t unix_offset_ns_;
   Referee msg_;
@@ -136,6 +164,15 @@ class RefereeEngine {
   std::int64_t t_defender_grace_ns_[2] = {0, 0};
   std::vector<RobotId> off_for_card_[2];  // robots taken off for a card, in order
   Team kicked_off_first_ = Team::kYellow;
+  // Autoreferee.
+  P2 last_ball_;
+  Referee::Command previous_command_ = Referee::HALT;
+  bool followed_ = false;
+  bool reported_ = false;            // this command's situation was reported (ball out, goal, placed)
+  bool control_requested_ = false;   // this command's HALT → STOP or goal acceptance was asked for
+  bool stage_requested_ = false;     // this stage's end was asked for
+  std::vector<GameEvent> events_out_;
+  std::vector<ControlRequest> control_out_;
 };
 
 /// The league's team enum of ours.
