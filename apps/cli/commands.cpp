@@ -32,6 +32,7 @@ const std::vector<Command>& Commands() {
       {"bench", "[WORLD…]", "step worlds as fast as possible and measure them against bare ODE", BenchCommand},
       {"batch", "[WORLD…]", "run many seeded worlds at once on worker processes", BatchCommand},
       {"soak", "[WORLD]", "run a world for long under random play and teleports, checking its state", SoakCommand},
+      {"match", "[WORLD] --yellow CMD --blue CMD", "a refereed match between two teams' programs; writes the result as JSON", MatchCommand},
       {"replay", "FILE", "play an SSL log file (.log, .log.gz) onto the league's multicast groups", ReplayCommand},
       {"--help", "", nullptr, HelpCommand},
       {"-h", "", nullptr, HelpCommand},

@@ -43,6 +43,8 @@ int BenchCommand(const std::vector<std::string>& args);
 int BatchCommand(const std::vector<std::string>& args);
 /// `ubersim soak [WORLD]`: a long run under random play and teleports (soak_command.cpp).
 int SoakCommand(const std::vector<std::string>& args);
+/// `ubersim match [WORLD] --yellow CMD --blue CMD`: a refereed match between two programs (match_command.cpp).
+int MatchCommand(const std::vector<std::string>& args);
 /// `ubersim replay FILE`: plays an SSL log file onto the league's multicast groups (replay_command.cpp).
 int ReplayCommand(const std::vector<std::string>& args);
 /// `ubersim --help`: prints TopHelp (commands.cpp).

@@ -68,7 +68,8 @@ const char* ExitCodesHelp() {
   return "exit codes: 0 ok, 1 runtime error, 2 bad usage, 3 invalid model file, 4 plugin error,\n"
          "            5 a validated physics number outside its band, 6 soak: a state-check finding\n"
          "            or memory growth, 7 run: a plugin fault stopped the world (crash report\n"
-         "            and snapshot written)\n";
+         "            and snapshot written), 8 match: a team's program ended or stopped sending\n"
+         "            commands (the result file says which)\n";
 }
 
 }  // namespace ubersim::cli

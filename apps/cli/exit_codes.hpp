@@ -18,6 +18,7 @@ constexpr int kExitPlugin = 4;       ///< plugin error (not found, refused by th
 constexpr int kExitOutOfBand = 5;    ///< validate-physics: a number outside its band
 constexpr int kExitSoakFailed = 6;   ///< soak: a state-check finding, or memory growth
 constexpr int kExitPluginFault = 7;  ///< run: a plugin fault stopped the world (crash report written)
+constexpr int kExitTeamFailed = 8;   ///< match: a team's program ended or stopped sending commands
 
 /// A bad value on the command line, found while a command runs: exit code 2.
 class UsageError : public std::runtime_error {

@@ -222,6 +222,7 @@ void RefereeEngine::Stop(std::int64_t t_ns, std::optional<Referee::Command> next
 
 void RefereeEngine::AddEvent(GameEvent event) {
   event.add_origin("UberSim");
+  history_times_.push_back(t_last_ns_);
   if (autoref()) {
     // The game controller fills in id and time stamp itself (§1.6).
     events_out_.push_back(event);

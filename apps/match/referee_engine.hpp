@@ -98,6 +98,8 @@ class RefereeEngine {
   std::vector<Referee> TakeCommandMessages();
   /// Every game event so far, oldest first.
   const std::vector<GameEvent>& history() const { return history_; }
+  /// The simulated time of each event of history(), ns.
+  const std::vector<std::int64_t>& history_times() const { return history_times_; }
   /// The match is over (POST_GAME).
   bool finished() const { return msg_.stage() == Referee::POST_GAME; }
 
@@ -137,6 +139,7 @@ class RefereeEngine {
   Referee msg_;
   std::vector<Referee> command_messages_;
   std::vector<GameEvent> history_;
+  std::vector<std::int64_t> history_times_;
   bool started_ = false;
   std::int64_t t_last_ns_ = 0;
   std::int64_t t_command_ns_ = 0;      // when the current command was issued

@@ -539,6 +539,7 @@ void WorldImpl::Apply(const PositionEvent& e) {
 }
 
 void WorldImpl::Apply(const CommandEvent& e) {
+  ++event_counters_.commands_received[e.robot.team == Team::kBlue ? 0 : 1];
   Robot* r = FindRobot(e.robot);
   if (!r) {
     ++event_counters_.rejected;

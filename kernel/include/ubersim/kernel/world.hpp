@@ -46,6 +46,9 @@ struct EventCounters {
   std::int64_t applied = 0;   ///< events applied
   std::int64_t rejected = 0;  ///< unknown robot, non-finite values, …
   std::int64_t lost = 0;      ///< robot commands the simulated radio lost
+  /// Robot commands that arrived per team ([0] blue, [1] yellow), refused ones included: whether a
+  /// team's software is still sending (ubersim match watches it).
+  std::int64_t commands_received[2] = {0, 0};
 };
 
 /// One simulated world. Deterministic: the same model, seed and events give bit-identical

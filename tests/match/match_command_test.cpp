@@ -1,0 +1,107 @@
+// SPDX-License-Identifier: Apache-2.0
+// `ubersim match` as a user runs it: two team programs (tests/match/scripted_team.py) started with
+// their colour and ports, watched, stopped; the result as JSON; a team that crashes or stops
+// answering ends the match with a clear result and exit code 8, never a hang. Loopback only.
+#include <gtest/gtest.h>
+
+#include <rapidjson/document.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "../common/run_ubersim.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using ubersim::testing::CliResult;
+using ubersim::testing::RunUbersim;
+
+// This test's ports (42xxx), every transport on loopback.
+const std::string kPorts =
+    " --local-only --no-viewer --control-port 42300 --blue-port 42301 --yellow-port 42302 --grsim-port 42311"
+    " --vision-port 42320 --referee-port 42303 --tracker-port 42310";
+
+struct MatchRun {
+  CliResult cli;
+  rapidjson::Document result;
+  std::string yellow_output, blue_output;
+};
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+MatchRun Match(const std::string& name, const std::string& yellow, const std::string& blue, const std::string& more) {
+  const fs::path dir = fs::temp_directory_path() / ("ubersim-match-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string team = "/usr/bin/python3 " UBERSIM_SOURCE_DIR "/tests/match/scripted_team.py ";
+  MatchRun r;
+  // `timeout` is the test's guard against a hang, far beyond what the match needs.
+  r.cli = RunUbersim("match div-b --yellow '" + team + yellow + "' --blue '" + team + blue + "' --result " +
+                         (dir / "result.json").string() + " --team-output " + dir.string() + kPorts + " " + more,
+                     "UBERSIM_PROTO_DIR=" UBERSIM_BINARY_DIR "/python timeout -s KILL 120");
+  r.result.Parse(Slurp(dir / "result.json").c_str());
+  r.yellow_output = Slurp(dir / "yellow.log");
+  r.blue_output = Slurp(dir / "blue.log");
+  fs::remove_all(dir);
+  return r;
+}
+
+TEST(MatchCommand, TwoTeamsPlayToTheEndOfTheDurationAndTheResultSaysSo) {
+  const MatchRun m = Match("play", "play", "play", "--duration 6 --speed 3");
+  ASSERT_EQ(m.cli.exit_code, 0) << m.cli.output;
+  ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
+  EXPECT_STREQ(m.result["outcome"].GetString(), "completed");
+  EXPECT_STREQ(m.result["reason"].GetString(), "the duration was reached");
+  EXPECT_NEAR(m.result["sim_time"].GetDouble(), 6.0, 0.01);
+  EXPECT_STREQ(m.result["referee"].GetString(), "builtin");
+  EXPECT_STREQ(m.result["stage"].GetString(), "NORMAL_FIRST_HALF");  // kicked off after 5 s
+  for (const char* color : {"yellow", "blue"}) {
+    const auto& team = m.result[color];
+    EXPECT_GT(team["commands_received"].GetInt64(), 100) << color;
+    EXPECT_EQ(team["score"].GetUint(), 0u);
+    EXPECT_TRUE(team["ended"].IsNull());  // stopped by the match, not ended by itself
+  }
+  // Each program was told its colour and its own ports.
+  EXPECT_NE(m.yellow_output.find("team yellow control 42302 vision 42320 referee 42303"), std::string::npos) << m.yellow_output;
+  EXPECT_NE(m.blue_output.find("team blue control 42301 vision 42320 referee 42303"), std::string::npos) << m.blue_output;
+}
+
+TEST(MatchCommand, ATeamThatCrashesEndsTheMatchWithItsExitCode) {
+  const MatchRun m = Match("crash", "play", "crash 1", "--speed 2");
+  EXPECT_EQ(m.cli.exit_code, 8) << m.cli.output;
+  ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
+  EXPECT_STREQ(m.result["outcome"].GetString(), "team failed");
+  EXPECT_NE(std::string(m.result["reason"].GetString()).find("blue team's program ended (exit code 3)"), std::string::npos)
+      << m.result["reason"].GetString();
+  EXPECT_STREQ(m.result["blue"]["ended"].GetString(), "exit code 3");
+  EXPECT_TRUE(m.result["yellow"]["ended"].IsNull());
+  EXPECT_LT(m.result["sim_time"].GetDouble(), 30.0);
+}
+
+TEST(MatchCommand, ATeamThatStopsSendingEndsTheMatchAfterTheTimeout) {
+  const MatchRun m = Match("silent", "silent", "play", "--speed 2 --team-timeout 2");
+  EXPECT_EQ(m.cli.exit_code, 8) << m.cli.output;
+  ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
+  EXPECT_NE(std::string(m.result["reason"].GetString()).find("yellow team sent no robot command for 2"), std::string::npos)
+      << m.result["reason"].GetString();
+  EXPECT_NEAR(m.result["sim_time"].GetDouble(), 2.0, 0.2);
+  EXPECT_EQ(m.result["yellow"]["commands_received"].GetInt64(), 0);
+}
+
+TEST(MatchCommand, BadUsageNamesWhatIsMissing) {
+  const CliResult no_teams = RunUbersim("match div-b --blue true" + kPorts);
+  EXPECT_EQ(no_teams.exit_code, 2);
+  EXPECT_NE(no_teams.output.find("give both teams' programs"), std::string::npos) << no_teams.output;
+  const CliResult none = RunUbersim("match div-b --yellow true --blue true --referee none" + kPorts);
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.output.find("a match needs a referee"), std::string::npos) << none.output;
+}
+
+}  // namespace
