@@ -211,6 +211,8 @@ int MatchCommand(const std::vector<std::string>& args) {
        "a team that sends no robot command for this many simulated seconds has stopped answering (0: never)")
       ("duration", po::value<double>(&f.duration)->default_value(0), "stop after SECONDS of simulated time (0: at the end of the match)")
       ("fast", "as fast as possible instead of real time (the programs must keep up)")
+      ("sync", "synchronous: as fast as the teams keep up; after each camera frame period the world waits until both "
+               "programs have sent a robot command (up to --team-timeout wall seconds)")
       ("speed", po::value<double>(&f.speed)->default_value(1.0), "speed factor (sim s per wall s)")
       ("local-only", "keep everything on loopback (127.0.0.1)")
       ("no-viewer", "do not start the browser viewer")
@@ -279,7 +281,12 @@ int MatchCommand(const std::vector<std::string>& args) {
   auto next_check = wall_start;
   RunOptions options;
   options.duration = f.duration;
-  options.speed_factor = vm.count("fast") ? 0.0 : f.speed;
+  const bool sync = vm.count("sync") > 0;
+  options.speed_factor = vm.count("fast") || sync ? 0.0 : f.speed;
+  // Synchronous: one frame period of the cameras per round of commands from both teams.
+  const auto frame_ns = static_cast<std::int64_t>(1e9 / std::max(1.0, world.perception().frame_rate));
+  std::int64_t next_sync_ns = world.clock().time_ns() + frame_ns;
+  std::int64_t synced[2] = {0, 0};
   options.status_interval = 5.0;
   options.between_steps = [&] {
     if (stop.load()) return;
@@ -301,6 +308,34 @@ int MatchCommand(const std::vector<std::string>& args) {
       reason = "the match is over";
       stop.store(true);
       return;
+    }
+    if (sync && world.clock().time_ns() >= next_sync_ns) {
+      const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(f.team_timeout > 0 ? f.team_timeout : 1e9);
+      for (;;) {
+        world.ProcessEvents();  // commands are counted as they are applied
+        const auto& counts = world.event_counters().commands_received;
+        if (counts[1] > synced[0] && counts[0] > synced[1]) break;
+        for (int i = 0; i < 2; ++i) {
+          if (!teams[i].ended) teams[i].ended = teams[i].process->Ended();
+        }
+        const bool yellow_late = counts[1] <= synced[0], blue_late = counts[0] <= synced[1];
+        if (teams[0].ended || teams[1].ended || std::chrono::steady_clock::now() > give_up || MatchInterrupted().load()) {
+          if (MatchInterrupted().load()) break;
+          const int late = teams[0].ended ? 0 : teams[1].ended ? 1 : yellow_late ? 0 : 1;
+          (void)blue_late;
+          outcome = "team failed";
+          reason = teams[late].ended ? std::string(colors[late]) + " team's program ended (" + *teams[late].ended + ")"
+                                     : std::string(colors[late]) + " team did not answer within " +
+                                           std::to_string(f.team_timeout) + " s (synchronous mode)";
+          reason += " at " + std::to_string(world.clock().seconds()) + " s";
+          stop.store(true);
+          return;
+        }
+        world.events().WaitForEvent(std::chrono::milliseconds(1));
+      }
+      synced[0] = world.event_counters().commands_received[1];
+      synced[1] = world.event_counters().commands_received[0];
+      next_sync_ns += frame_ns;
     }
     const auto now = std::chrono::steady_clock::now();
     if (now < next_check) return;

@@ -95,6 +95,24 @@ TEST(MatchCommand, ATeamThatStopsSendingEndsTheMatchAfterTheTimeout) {
   EXPECT_EQ(m.result["yellow"]["commands_received"].GetInt64(), 0);
 }
 
+TEST(MatchCommand, SynchronousAdvancesOneCameraFrameForEachRoundOfBothTeamsCommands) {
+  const MatchRun m = Match("sync", "play", "play", "--sync --duration 3");
+  ASSERT_EQ(m.cli.exit_code, 0) << m.cli.output;
+  ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
+  EXPECT_STREQ(m.result["outcome"].GetString(), "completed");
+  // At least one command from each team per frame period (60 Hz) of the 3 s.
+  for (const char* color : {"yellow", "blue"}) EXPECT_GE(m.result[color]["commands_received"].GetInt64(), 179) << color;
+}
+
+TEST(MatchCommand, SynchronousWithATeamThatDoesNotAnswerEndsAfterTheTimeout) {
+  const MatchRun m = Match("sync-silent", "play", "silent", "--sync --team-timeout 1");
+  EXPECT_EQ(m.cli.exit_code, 8) << m.cli.output;
+  ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
+  EXPECT_NE(std::string(m.result["reason"].GetString()).find("blue team did not answer within 1"), std::string::npos)
+      << m.result["reason"].GetString();
+  EXPECT_LT(m.result["sim_time"].GetDouble(), 0.05);  // the world waited: nothing was simulated past the first frame
+}
+
 TEST(MatchCommand, BadUsageNamesWhatIsMissing) {
   const CliResult no_teams = RunUbersim("match div-b --blue true" + kPorts);
   EXPECT_EQ(no_teams.exit_code, 2);
