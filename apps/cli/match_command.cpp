@@ -235,8 +235,8 @@ int MatchCommand(const std::vector<std::string>& args) {
   if (const auto done = ParseCommandLine(args, "match", desc, vm, &hidden, &pos)) return *done;
   if (f.yellow.empty() || f.blue.empty()) throw UsageError("give both teams' programs: --yellow CMD --blue CMD");
   if (f.duration < 0 || f.speed < 0 || f.team_timeout < 0) throw UsageError("--duration, --speed and --team-timeout must be >= 0");
-  if (vm["referee"].defaulted()) f.match.referee = "builtin";  // a match is refereed
-  if (f.match.referee == "none") throw UsageError("--referee none: a match needs a referee (builtin or gc)");
+  // The world's match: block, then: a match is refereed.
+  const bool referee_given = !vm["referee"].defaulted();
   LogLevel level = LogLevel::kWarning;
   if (f.log_level == "debug") level = LogLevel::kDebug;
   if (f.log_level == "info") level = LogLevel::kInfo;
@@ -246,6 +246,9 @@ int MatchCommand(const std::vector<std::string>& args) {
   const fs::path world_file = f.world_arg.empty() ? DefaultWorldFile() : WorldFileOf(f.world_arg);
   LoadedWorld loaded = LoadWorldWithPlugins(world_file, f.plugin_paths);
   WorldModel& model = loaded.model;
+  f.match.FromWorld(model.match, vm);
+  if (!referee_given && f.match.referee == "none") f.match.referee = "builtin";
+  if (f.match.referee == "none") throw UsageError("--referee none: a match needs a referee (builtin or gc)");
   f.overrides.local_only = vm.count("local-only") > 0;
   for (const char* port : {"vision", "control", "blue", "yellow", "grsim", "viewer"}) {
     if (vm.count(std::string(port) + "-port")) f.overrides.ports[port] = vm[std::string(port) + "-port"].as<int>();

@@ -30,6 +30,26 @@ void MatchFlags::AddTo(po::options_description& desc) {
        "who places the ball for free kicks: auto (the team; the simulator when the team makes no progress) or simulator");
 }
 
+void MatchFlags::FromWorld(const ParamView& m, const po::variables_map& vm) {
+  if (!m.IsObject()) return;  // no match: block
+  const auto unset = [&](const char* option) { return vm.count(option) == 0 || vm[option].defaulted(); };
+  if (unset("referee")) referee = m.GetString("referee", referee);
+  if (unset("game-controller")) game_controller = m.GetString("game_controller", game_controller);
+  if (unset("tracker")) tracker = m.GetBool("tracker", tracker);
+  if (unset("half-duration")) half_duration = m.GetDouble("half_duration", half_duration);
+  if (unset("half-time-break")) half_time_break = m.GetDouble("half_time_break", half_time_break);
+  if (unset("first-kickoff")) first_kickoff = m.GetString("first_kickoff", first_kickoff);
+  if (unset("placement")) placement = m.GetString("placement", placement);
+  if (m.Has("yellow")) {
+    if (unset("yellow-name")) yellow_name = m["yellow"].GetString("name", yellow_name);
+    if (unset("yellow-keeper")) yellow_keeper = static_cast<int>(m["yellow"].GetInt("keeper", yellow_keeper));
+  }
+  if (m.Has("blue")) {
+    if (unset("blue-name")) blue_name = m["blue"].GetString("name", blue_name);
+    if (unset("blue-keeper")) blue_keeper = static_cast<int>(m["blue"].GetInt("keeper", blue_keeper));
+  }
+}
+
 match::MatchOptions MatchFlags::Options(const kernel::WorldModel& model, bool local_only,
                                         std::unique_ptr<sslog::LogWriter>& writer) const {
   match::MatchOptions o;

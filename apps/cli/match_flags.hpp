@@ -36,6 +36,8 @@ struct MatchFlags {
   /// when --record is given (kept in `writer`). Throws UsageError for a bad value and
   /// std::runtime_error naming the file it cannot write.
   match::MatchOptions Options(const kernel::WorldModel& model, bool local_only, std::unique_ptr<sslog::LogWriter>& writer) const;
+  /// Takes the world file's `match:` block for every option the command line left at its default.
+  void FromWorld(const ParamView& block, const boost::program_options::variables_map& vm);
   /// True when any match option is on (a session is needed).
   bool Any() const { return referee != "none" || tracker || !record.empty(); }
 };

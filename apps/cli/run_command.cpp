@@ -114,6 +114,7 @@ LogLevel LogLevelOf(const std::string& name) {
 // transports left out. Throws OverrideError, UsageError (a transport the world has not) or ModelError.
 void ApplyFlags(RunFlags& f, const po::variables_map& vm, WorldModel& model, const WorldLoading& loading) {
   f.overrides.local_only = vm.count("local-only") > 0;
+  f.match.FromWorld(model.match, vm);
   for (const char* port : {"vision", "control", "blue", "yellow", "grsim", "viewer"}) {
     if (vm.count(std::string(port) + "-port")) f.overrides.ports[port] = vm[std::string(port) + "-port"].as<int>();
   }

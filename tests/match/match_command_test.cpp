@@ -113,6 +113,52 @@ TEST(MatchCommand, SynchronousWithATeamThatDoesNotAnswerEndsAfterTheTimeout) {
   EXPECT_LT(m.result["sim_time"].GetDouble(), 0.05);  // the world waited: nothing was simulated past the first frame
 }
 
+// The shipped Div B world with a `match:` block, in the temp directory (model paths made absolute).
+std::string WorldWithMatchBlock(const std::string& name, const std::string& block) {
+  std::string yaml = Slurp(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml");
+  const std::string models = UBERSIM_SOURCE_DIR "/models/";
+  for (std::size_t at = yaml.find("../"); at != std::string::npos; at = yaml.find("../", at)) {
+    yaml.replace(at, 3, models);
+    at += models.size();
+  }
+  const fs::path file = fs::temp_directory_path() / (name + "-" + std::to_string(::getpid()) + ".yaml");
+  std::ofstream(file) << yaml << "\n" << block << "\n";
+  return file.string();
+}
+
+TEST(MatchCommand, TheWorldsMatchBlockSetsTheMatchAndItEndsAfterTheSecondHalf) {
+  const std::string world = WorldWithMatchBlock(
+      "match-block", "match:\n  half_duration: 2\n  half_time_break: 1\n  yellow: {name: Alpha}\n  blue: {name: Beta, keeper: 1}");
+  const fs::path dir = fs::temp_directory_path() / ("ubersim-match-block-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string team = "/usr/bin/python3 " UBERSIM_SOURCE_DIR "/tests/match/scripted_team.py play";
+  const CliResult r = RunUbersim("match " + world + " --yellow '" + team + "' --blue '" + team + "' --speed 4 --result " +
+                                     (dir / "result.json").string() + " --team-output " + dir.string() + kPorts,
+                                 "UBERSIM_PROTO_DIR=" UBERSIM_BINARY_DIR "/python timeout -s KILL 120");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  rapidjson::Document result;
+  result.Parse(Slurp(dir / "result.json").c_str());
+  ASSERT_TRUE(result.IsObject()) << r.output;
+  EXPECT_STREQ(result["reason"].GetString(), "the match is over");
+  EXPECT_STREQ(result["stage"].GetString(), "POST_GAME");
+  EXPECT_STREQ(result["yellow"]["name"].GetString(), "Alpha");
+  EXPECT_STREQ(result["blue"]["name"].GetString(), "Beta");
+  // Two halves of 2 s of play, a 1 s break, and the stoppages before each kick-off.
+  EXPECT_GT(result["sim_time"].GetDouble(), 9.0);
+  EXPECT_LT(result["sim_time"].GetDouble(), 30.0);
+  fs::remove_all(dir);
+  fs::remove(world);
+}
+
+TEST(MatchCommand, AMistypedMatchBlockIsALocatedModelError) {
+  const std::string world = WorldWithMatchBlock("match-typo", "match:\n  referee: builtn");
+  const CliResult r = RunUbersim("validate " + world);
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find(world), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("referee"), std::string::npos) << r.output;
+  fs::remove(world);
+}
+
 TEST(MatchCommand, BadUsageNamesWhatIsMissing) {
   const CliResult no_teams = RunUbersim("match div-b --blue true" + kPorts);
   EXPECT_EQ(no_teams.exit_code, 2);

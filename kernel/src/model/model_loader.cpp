@@ -531,6 +531,7 @@ struct ModelLoader::Impl {
     w.seed = static_cast<std::uint64_t>(v.GetInt("seed", static_cast<std::int64_t>(w.seed)));
     w.on_plugin_fault = v.GetString("on_plugin_fault", w.on_plugin_fault);
     w.local_only = v.GetBool("local_only", w.local_only);
+    if (v.Has("match")) w.match = v["match"];
 
     if (v.Has("plugin_paths")) {
       const ParamView paths = v["plugin_paths"];

@@ -276,6 +276,9 @@ struct WorldModel {
   std::array<std::shared_ptr<const RobotModel>, 2> team_models;
   /// Every transport on loopback only (`local_only: true`, `ubersim run --local-only`).
   bool local_only = false;
+  /// The world file's `match:` block (referee, tracker, match length; docs/match.md), checked
+  /// against the schema and read by the apps that run a match; empty when absent.
+  ParamView match;
 };
 
 /// Gives the JSON Schema of a plugin's parameter block, or throws saying why the plugin is
