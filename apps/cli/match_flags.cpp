@@ -15,6 +15,8 @@ void MatchFlags::AddTo(po::options_description& desc) {
       ("game-controller", po::value<std::string>(&game_controller)->default_value("localhost:10009"),
        "HOST:PORT of ssl-game-controller -timeAcquisitionMode ci (with --referee gc)")
       ("tracker", po::bool_switch(&tracker), "publish tracked vision (TrackerWrapperPacket) from the simulated truth on 224.5.23.2:10010")
+      ("tracker-noise", po::bool_switch(&tracker_noise),
+       "tracked positions carry the world's vision noise (perception: σ of positions and orientations), seeded by the world")
       ("referee-port", po::value<int>(&referee_port)->default_value(10003), "port of the Referee messages (group 224.5.23.1)")
       ("tracker-port", po::value<int>(&tracker_port)->default_value(10010), "port of the tracked frames (group 224.5.23.2)")
       ("record", po::value<std::string>(&record),
@@ -36,6 +38,7 @@ void MatchFlags::FromWorld(const ParamView& m, const po::variables_map& vm) {
   if (unset("referee")) referee = m.GetString("referee", referee);
   if (unset("game-controller")) game_controller = m.GetString("game_controller", game_controller);
   if (unset("tracker")) tracker = m.GetBool("tracker", tracker);
+  if (unset("tracker-noise")) tracker_noise = m.GetBool("tracker_noise", tracker_noise);
   if (unset("half-duration")) half_duration = m.GetDouble("half_duration", half_duration);
   if (unset("half-time-break")) half_time_break = m.GetDouble("half_time_break", half_time_break);
   if (unset("first-kickoff")) first_kickoff = m.GetString("first_kickoff", first_kickoff);
@@ -79,7 +82,8 @@ match::MatchOptions MatchFlags::Options(const kernel::WorldModel& model, bool lo
   }
   o.referee_port = static_cast<std::uint16_t>(referee_port);
   o.tracker_port = static_cast<std::uint16_t>(tracker_port);
-  o.tracker = tracker;
+  o.tracker = tracker || tracker_noise;
+  o.tracker_noise = tracker_noise;
   o.local_only = local_only;
   if (!record.empty()) {
     writer = std::make_unique<sslog::LogWriter>(record);

@@ -20,6 +20,7 @@ struct MatchFlags {
   std::string referee = "none";   ///< none, builtin or gc
   std::string game_controller = "localhost:10009";  ///< --game-controller HOST:PORT (CI mode)
   bool tracker = false;           ///< --tracker
+  bool tracker_noise = false;     ///< --tracker-noise
   std::string record;             ///< --record FILE
   double half_duration = 300.0;   ///< s
   double half_time_break = 300.0; ///< s
@@ -39,7 +40,7 @@ struct MatchFlags {
   /// Takes the world file's `match:` block for every option the command line left at its default.
   void FromWorld(const ParamView& block, const boost::program_options::variables_map& vm);
   /// True when any match option is on (a session is needed).
-  bool Any() const { return referee != "none" || tracker || !record.empty(); }
+  bool Any() const { return referee != "none" || tracker || tracker_noise || !record.empty(); }
 };
 
 }  // namespace ubersim::cli

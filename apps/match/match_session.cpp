@@ -51,6 +51,7 @@ MatchSession::MatchSession(kernel::World& world, MatchOptions options, Log& log)
     if (options_.network) senders_->referee = sender(options_.referee_address, options_.referee_port, "referee");
   }
   tracker_uuid_ = UuidFromSeed(world_.model().seed);
+  tracker_rng_.seed(world_.model().seed ^ 0x6e6f697365ULL);  // "noise": its own stream, the same per world
   if (options_.tracker) {
     if (options_.network) senders_->tracker = sender(options_.tracker_address, options_.tracker_port, "tracker");
   }
@@ -226,7 +227,11 @@ void MatchSession::AfterStep() {
   }
   if (tracker_due) {
     std::string bytes;
-    TrackedPacket(truth, tracker_frame_++, UnixOffset(), {tracker_uuid_, "UberSim ground truth"}).SerializeToString(&bytes);
+    const kernel::PerceptionModel& p = world_.perception();
+    const TrackerNoise noise{p.ball_position_sigma, p.robot_position_sigma, p.robot_orientation_sigma, &tracker_rng_};
+    const TrackerSource source{tracker_uuid_, options_.tracker_noise ? "UberSim truth with vision noise" : "UberSim ground truth"};
+    TrackedPacket(truth, tracker_frame_++, UnixOffset(), source, options_.tracker_noise ? &noise : nullptr)
+        .SerializeToString(&bytes);
     Send(WireMessage::kTracker, bytes, now);
     next_tracker_ns_ = now + PeriodNs(options_.tracker_rate);
   }

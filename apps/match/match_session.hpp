@@ -9,6 +9,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,7 @@ struct MatchOptions {
   std::string game_controller;
   double ci_rate = 100.0;                ///< CiInputs per simulated second
   bool tracker = false;                  ///< publish TrackerWrapperPackets
+  bool tracker_noise = false;            ///< tracked positions carry the perception pipeline's noise (seeded by the world)
   double referee_rate = 40.0;            ///< Referee messages per simulated second, besides one per command
   double tracker_rate = 60.0;            ///< tracked frames per simulated second
   std::string referee_address = "224.5.23.1";  ///< referee group
@@ -87,6 +89,7 @@ class MatchSession {
   std::int64_t next_tracker_ns_ = 0;
   std::uint32_t tracker_frame_ = 0;
   std::string tracker_uuid_;
+  std::mt19937_64 tracker_rng_;
   std::optional<std::int64_t> unix_offset_ns_;
 };
 

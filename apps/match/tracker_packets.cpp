@@ -28,7 +28,9 @@ std::string UuidFromSeed(std::uint64_t seed) {
 }
 
 TrackerWrapperPacket TrackedPacket(const WorldSnapshot& truth, std::uint32_t frame_number, std::int64_t unix_offset_ns,
-                                   const TrackerSource& source) {
+                                   const TrackerSource& source, const TrackerNoise* noise) {
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const auto jitter = [&](double sigma) { return noise != nullptr && sigma > 0 ? sigma * gauss(*noise->rng) : 0.0; };
   TrackerWrapperPacket packet;
   packet.set_uuid(source.uuid);
   packet.set_source_name(source.name);
@@ -39,8 +41,9 @@ TrackerWrapperPacket TrackedPacket(const WorldSnapshot& truth, std::uint32_t fra
   const Vec3& p = truth.ball.pose.position;
   const Vec3& v = truth.ball.twist.linear;
   // The tracker's ball height is that of its centre above the carpet less the radius: 0 when it rolls.
-  ball->mutable_pos()->set_x(static_cast<float>(p.x()));
-  ball->mutable_pos()->set_y(static_cast<float>(p.y()));
+  const double ball_sigma = noise != nullptr ? noise->ball_position_sigma : 0.0;
+  ball->mutable_pos()->set_x(static_cast<float>(p.x() + jitter(ball_sigma)));
+  ball->mutable_pos()->set_y(static_cast<float>(p.y() + jitter(ball_sigma)));
   ball->mutable_pos()->set_z(static_cast<float>(std::max(0.0, p.z() - truth.ball.radius)));
   ball->mutable_vel()->set_x(static_cast<float>(v.x()));
   ball->mutable_vel()->set_y(static_cast<float>(v.y()));
@@ -51,9 +54,11 @@ TrackerWrapperPacket TrackedPacket(const WorldSnapshot& truth, std::uint32_t fra
     TrackedRobot* t = frame->add_robots();
     t->mutable_robot_id()->set_id(static_cast<unsigned>(r.id.id));
     t->mutable_robot_id()->set_team(WireTeam(r.id.team));
-    t->mutable_pos()->set_x(static_cast<float>(r.pose.position.x()));
-    t->mutable_pos()->set_y(static_cast<float>(r.pose.position.y()));
-    t->set_orientation(static_cast<float>(Yaw(r.pose.orientation)));
+    const double robot_sigma = noise != nullptr ? noise->robot_position_sigma : 0.0;
+    const double yaw_sigma = noise != nullptr ? noise->robot_orientation_sigma : 0.0;
+    t->mutable_pos()->set_x(static_cast<float>(r.pose.position.x() + jitter(robot_sigma)));
+    t->mutable_pos()->set_y(static_cast<float>(r.pose.position.y() + jitter(robot_sigma)));
+    t->set_orientation(static_cast<float>(std::remainder(Yaw(r.pose.orientation) + jitter(yaw_sigma), 2 * M_PI)));
     t->mutable_vel()->set_x(static_cast<float>(r.twist.linear.x()));
     t->mutable_vel()->set_y(static_cast<float>(r.twist.linear.y()));
     t->set_vel_angular(static_cast<float>(r.twist.angular.z()));

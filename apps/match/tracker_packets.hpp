@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <random>
 #include <string>
 
 #include <ubersim/world_state.hpp>
@@ -18,10 +19,19 @@ struct TrackerSource {
   std::string name = "UberSim ground truth";  ///< source_name
 };
 
+/// Gaussian noise on tracked positions (the perception pipeline's σ), drawn from `rng`.
+struct TrackerNoise {
+  double ball_position_sigma = 0;      ///< m
+  double robot_position_sigma = 0;     ///< m
+  double robot_orientation_sigma = 0;  ///< rad
+  std::mt19937_64* rng = nullptr;      ///< the stream to draw from (seeded by the caller)
+};
+
 /// One tracked frame of `truth`: the ball (visibility 1) and every robot on the field, with
-/// velocities; `unix_offset_ns` turns simulated time into the Unix time stamp.
+/// velocities; `unix_offset_ns` turns simulated time into the Unix time stamp. With `noise`, the
+/// positions and orientations carry it (velocities stay true).
 TrackerWrapperPacket TrackedPacket(const WorldSnapshot& truth, std::uint32_t frame_number, std::int64_t unix_offset_ns,
-                                   const TrackerSource& source);
+                                   const TrackerSource& source, const TrackerNoise* noise = nullptr);
 
 /// A version-4-shaped UUID drawn from `seed` (deterministic: the same world gives the same id).
 std::string UuidFromSeed(std::uint64_t seed);
