@@ -18,10 +18,13 @@ namespace fs = std::filesystem;
 using ubersim::testing::CliResult;
 using ubersim::testing::RunUbersim;
 
-// This test's ports (42xxx), every transport on loopback.
-const std::string kPorts =
-    " --local-only --no-viewer --control-port 42300 --blue-port 42301 --yellow-port 42302 --grsim-port 42311"
-    " --vision-port 42320 --referee-port 42303 --tracker-port 42310";
+// Ports of one test (42xxx from `base`: ctest runs the tests of this file in parallel), every
+// transport on loopback.
+std::string Ports(int base) {
+  const auto p = [&](int offset) { return std::to_string(base + offset); };
+  return " --local-only --no-viewer --control-port " + p(0) + " --blue-port " + p(1) + " --yellow-port " + p(2) +
+         " --grsim-port " + p(11) + " --vision-port " + p(20) + " --referee-port " + p(3) + " --tracker-port " + p(10);
+}
 
 struct MatchRun {
   CliResult cli;
@@ -36,7 +39,8 @@ std::string Slurp(const fs::path& p) {
   return s.str();
 }
 
-MatchRun Match(const std::string& name, const std::string& yellow, const std::string& blue, const std::string& more) {
+MatchRun Match(const std::string& name, int ports, const std::string& yellow, const std::string& blue,
+               const std::string& more) {
   const fs::path dir = fs::temp_directory_path() / ("ubersim-match-" + name + "-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -44,7 +48,7 @@ MatchRun Match(const std::string& name, const std::string& yellow, const std::st
   MatchRun r;
   // `timeout` is the test's guard against a hang, far beyond what the match needs.
   r.cli = RunUbersim("match div-b --yellow '" + team + yellow + "' --blue '" + team + blue + "' --result " +
-                         (dir / "result.json").string() + " --team-output " + dir.string() + kPorts + " " + more,
+                         (dir / "result.json").string() + " --team-output " + dir.string() + Ports(ports) + " " + more,
                      "UBERSIM_PROTO_DIR=" UBERSIM_BINARY_DIR "/python timeout -s KILL 120");
   r.result.Parse(Slurp(dir / "result.json").c_str());
   r.yellow_output = Slurp(dir / "yellow.log");
@@ -54,7 +58,7 @@ MatchRun Match(const std::string& name, const std::string& yellow, const std::st
 }
 
 TEST(MatchCommand, TwoTeamsPlayToTheEndOfTheDurationAndTheResultSaysSo) {
-  const MatchRun m = Match("play", "play", "play", "--duration 6 --speed 3");
+  const MatchRun m = Match("play", 42300, "play", "play", "--duration 6 --speed 3");
   ASSERT_EQ(m.cli.exit_code, 0) << m.cli.output;
   ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
   EXPECT_STREQ(m.result["outcome"].GetString(), "completed");
@@ -74,7 +78,7 @@ TEST(MatchCommand, TwoTeamsPlayToTheEndOfTheDurationAndTheResultSaysSo) {
 }
 
 TEST(MatchCommand, ATeamThatCrashesEndsTheMatchWithItsExitCode) {
-  const MatchRun m = Match("crash", "play", "crash 1", "--speed 2");
+  const MatchRun m = Match("crash", 42330, "play", "crash 1", "--speed 2");
   EXPECT_EQ(m.cli.exit_code, 8) << m.cli.output;
   ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
   EXPECT_STREQ(m.result["outcome"].GetString(), "team failed");
@@ -86,7 +90,7 @@ TEST(MatchCommand, ATeamThatCrashesEndsTheMatchWithItsExitCode) {
 }
 
 TEST(MatchCommand, ATeamThatStopsSendingEndsTheMatchAfterTheTimeout) {
-  const MatchRun m = Match("silent", "silent", "play", "--speed 2 --team-timeout 2");
+  const MatchRun m = Match("silent", 42360, "silent", "play", "--speed 2 --team-timeout 2");
   EXPECT_EQ(m.cli.exit_code, 8) << m.cli.output;
   ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
   EXPECT_NE(std::string(m.result["reason"].GetString()).find("yellow team sent no robot command for 2"), std::string::npos)
@@ -96,7 +100,7 @@ TEST(MatchCommand, ATeamThatStopsSendingEndsTheMatchAfterTheTimeout) {
 }
 
 TEST(MatchCommand, SynchronousAdvancesOneCameraFrameForEachRoundOfBothTeamsCommands) {
-  const MatchRun m = Match("sync", "play", "play", "--sync --duration 3");
+  const MatchRun m = Match("sync", 42390, "play", "play", "--sync --duration 3");
   ASSERT_EQ(m.cli.exit_code, 0) << m.cli.output;
   ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
   EXPECT_STREQ(m.result["outcome"].GetString(), "completed");
@@ -105,7 +109,7 @@ TEST(MatchCommand, SynchronousAdvancesOneCameraFrameForEachRoundOfBothTeamsComma
 }
 
 TEST(MatchCommand, SynchronousWithATeamThatDoesNotAnswerEndsAfterTheTimeout) {
-  const MatchRun m = Match("sync-silent", "play", "silent", "--sync --team-timeout 1");
+  const MatchRun m = Match("sync-silent", 42420, "play", "silent", "--sync --team-timeout 1");
   EXPECT_EQ(m.cli.exit_code, 8) << m.cli.output;
   ASSERT_TRUE(m.result.IsObject()) << m.cli.output;
   EXPECT_NE(std::string(m.result["reason"].GetString()).find("blue team did not answer within 1"), std::string::npos)
@@ -133,7 +137,7 @@ TEST(MatchCommand, TheWorldsMatchBlockSetsTheMatchAndItEndsAfterTheSecondHalf) {
   fs::create_directories(dir);
   const std::string team = "/usr/bin/python3 " UBERSIM_SOURCE_DIR "/tests/match/scripted_team.py play";
   const CliResult r = RunUbersim("match " + world + " --yellow '" + team + "' --blue '" + team + "' --speed 4 --result " +
-                                     (dir / "result.json").string() + " --team-output " + dir.string() + kPorts,
+                                     (dir / "result.json").string() + " --team-output " + dir.string() + Ports(42450),
                                  "UBERSIM_PROTO_DIR=" UBERSIM_BINARY_DIR "/python timeout -s KILL 120");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   rapidjson::Document result;
@@ -160,10 +164,10 @@ TEST(MatchCommand, AMistypedMatchBlockIsALocatedModelError) {
 }
 
 TEST(MatchCommand, BadUsageNamesWhatIsMissing) {
-  const CliResult no_teams = RunUbersim("match div-b --blue true" + kPorts);
+  const CliResult no_teams = RunUbersim("match div-b --blue true" + Ports(42480));
   EXPECT_EQ(no_teams.exit_code, 2);
   EXPECT_NE(no_teams.output.find("give both teams' programs"), std::string::npos) << no_teams.output;
-  const CliResult none = RunUbersim("match div-b --yellow true --blue true --referee none" + kPorts);
+  const CliResult none = RunUbersim("match div-b --yellow true --blue true --referee none" + Ports(42480));
   EXPECT_EQ(none.exit_code, 2);
   EXPECT_NE(none.output.find("a match needs a referee"), std::string::npos) << none.output;
 }
