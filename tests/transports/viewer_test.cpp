@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // The viewer transport: its messages, its HTTP + WebSocket server over real loopback sockets, and
 // the plugin inside a real world (commands from a WebSocket reach the kernel; what the page gets
-// matches the world). The browser end-to-end test is tests/interfaces/test_viewer.py.
+// matches the world; a Referee datagram on loopback multicast reaches the page). The referee
+// JSON and its relay are in viewer_referee_test.cpp; the browser end-to-end test is
+// tests/interfaces/test_viewer.py.
 #include <sys/socket.h>
 #include <sys/time.h>
 
@@ -9,7 +11,9 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <regex>
+#include <span>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -25,6 +29,8 @@
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/model.hpp"
 #include "ubersim/kernel/world.hpp"
+#include "referee_datagram.hpp"
+#include "transport_common/multicast_sender.hpp"
 #include "viewer_protocol.hpp"
 #include "viewer_server.hpp"
 #include "web_assets.hpp"
@@ -218,6 +224,9 @@ TEST(ViewerProtocol, TheStateMessageCarriesTheSampleFramesAndStatus) {
   EXPECT_EQ(d["status"]["clients"].GetInt(), 3);
   EXPECT_TRUE(d["status"]["paused"].GetBool());
   EXPECT_TRUE(d["status"]["speed"].IsNull());
+  EXPECT_TRUE(d["status"]["referee_age"].IsNull()) << "no Referee message yet";
+  status.referee_age = 2.5;
+  EXPECT_DOUBLE_EQ(Parse(EncodeState(s, {}, status))["status"]["referee_age"].GetDouble(), 2.5);
 }
 
 TEST(ViewerProtocol, TheHelloCarriesTheFieldAndCameras) {
@@ -237,6 +246,9 @@ TEST(ViewerProtocol, TheHelloCarriesTheFieldAndCameras) {
   EXPECT_DOUBLE_EQ(d["field"]["arcs"][0]["radius"].GetDouble(), 0.5);
   EXPECT_EQ(d["cameras"][0]["id"].GetInt(), 1);
   EXPECT_DOUBLE_EQ(d["cameras"][0]["z"].GetDouble(), 6);
+  EXPECT_TRUE(d["referee"].IsNull()) << "no referee socket: the page shows no match";
+  const rapidjson::Document with = Parse(EncodeHello("w", 60, field, {}, "224.5.23.1:10003"));
+  EXPECT_STREQ(with["referee"].GetString(), "224.5.23.1:10003");
 }
 
 // ---------------------------------------------------------------- server
@@ -279,12 +291,16 @@ struct WsClient {
     ws.read(b);
     return beast::buffers_to_string(b.data());
   }
-  // Reads until a message whose "type" is `type`.
-  rapidjson::Document ReadType(const std::string& type) {
-    for (int i = 0; i < 1000; ++i) {
+  // Reads until a message whose "type" is `type`, at most `limit` messages.
+  std::optional<rapidjson::Document> TryReadType(const std::string& type, int limit) {
+    for (int i = 0; i < limit; ++i) {
       rapidjson::Document d = Parse(Read());
       if (d.IsObject() && d.HasMember("type") && type == d["type"].GetString()) return d;
     }
+    return std::nullopt;
+  }
+  rapidjson::Document ReadType(const std::string& type) {
+    if (auto d = TryReadType(type, 1000)) return std::move(*d);
     ADD_FAILURE() << "no '" << type << "' message in 1000";
     return {};
   }
@@ -298,6 +314,7 @@ struct ViewerServerTest : ::testing::Test {
   std::ostringstream log_text;
   kernel::StreamLog log{log_text, LogLevel::kDebug};
   std::atomic<int> ticks{0};
+  std::vector<std::string> catch_up;  // what a new client gets after the hello
   std::unique_ptr<ViewerServer> server;
 
   void StartServer(int max_clients = 16) {
@@ -306,6 +323,7 @@ struct ViewerServerTest : ::testing::Test {
     o.max_clients = max_clients;
     ViewerServer::Callbacks cb;
     cb.hello = [] { return std::string(R"({"type":"hello"})"); };
+    cb.catch_up = [this] { return catch_up; };
     cb.on_message = [](std::string_view text) {
       return R"({"type":"ack","echo":")" + std::string(text) + "\"}";
     };
@@ -396,6 +414,25 @@ TEST_F(ViewerServerTest, ASlowBrowserOnlyEverHasTheNewestStateWaiting) {
   EXPECT_LT(received, kStates / 4) << "states were queued for a page that did not read";
 }
 
+TEST_F(ViewerServerTest, StatesNeverPushOutAWaitingRefereeMessageAndANewPageCatchesUp) {
+  catch_up = {R"({"type":"referee","command":"STOP"})"};
+  StartServer();
+  WsClient slow(server->Port());
+  EXPECT_EQ(slow.Read(), R"({"type":"hello"})");
+  EXPECT_EQ(slow.Read(), R"({"type":"referee","command":"STOP"})") << "the latest match state at once";
+  WaitForClients(1);
+  // A referee message among many large states to a page that reads nothing for a while.
+  const std::string filler(64 * 1024, 'x');
+  for (int i = 0; i < 100; ++i) server->Broadcast(std::make_shared<const std::string>("state " + filler));
+  server->Broadcast(std::make_shared<const std::string>("referee 1"), ViewerServer::Channel::kReferee);
+  for (int i = 0; i < 100; ++i) server->Broadcast(std::make_shared<const std::string>("state " + filler));
+  server->Broadcast(std::make_shared<const std::string>("last"));
+  int referees = 0;
+  std::string message;
+  while ((message = slow.Read()) != "last") referees += message == "referee 1";
+  EXPECT_EQ(referees, 1) << "the referee message has its own slot: replaced only by a newer one";
+}
+
 TEST_F(ViewerServerTest, ABusyPortIsRefusedNamingTheAddress) {
   StartServer();
   ViewerServer::Options o;
@@ -436,15 +473,18 @@ struct ViewerWorld : ::testing::Test {
   std::unique_ptr<kernel::World> world;
   std::uint16_t port = 0;
 
-  void SetUp() override {
+  void SetUp() override { Build(R"({"port": 0, "rate": 200})"); }
+
+  // The Div B world with only a viewer of these parameters; `local_only` as `--local-only`.
+  void Build(const std::string& viewer_params, bool local_only = false) {
     const kernel::ModelLoader loader(kernel::ModelLoader::DefaultSchemaDir(),
                                      [this](PluginKind k, const std::string& id) {
                                        return registry.Find(k, id).schema_json;
                                      });
     kernel::WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml");
     model.transports.clear();
-    model.transports.push_back(kernel::TransportModel{
-        "viewer", ParamView::FromJson(R"({"port": 0, "rate": 200})")});
+    model.transports.push_back(kernel::TransportModel{"viewer", ParamView::FromJson(viewer_params)});
+    model.local_only = local_only;
     world = std::make_unique<kernel::World>(model, registry, log);
     const std::vector<std::string> endpoints = world->TransportEndpoints();
     ASSERT_EQ(endpoints.size(), 1u);
@@ -572,6 +612,144 @@ TEST_F(ViewerWorld, APageSeesTheWorldAndItsCommandsReachTheKernel) {
   world->ProcessEvents();
   EXPECT_EQ(world->event_counters().applied, applied);
   EXPECT_NE(log_text.str().find("viewer command refused"), std::string::npos) << log_text.str();
+}
+
+// ---------------------------------------------------------------- the match
+
+// A UDP port nobody on this machine holds now (the referee socket shares its port anyway).
+std::uint16_t FreeUdpPort() {
+  asio::io_context io;
+  asio::ip::udp::socket s(io, asio::ip::udp::endpoint(asio::ip::udp::v4(), 0));
+  return s.local_endpoint().port();
+}
+
+std::span<const std::uint8_t> Bytes(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+// The plugin in a local-only world, listening for the referee on a test-only port of the
+// league's group; the test sends as the game controller does, on loopback.
+struct ViewerMatch : ViewerWorld {
+  std::uint16_t referee_port = 0;
+  std::unique_ptr<transport::MulticastSender> referee;
+
+  void SetUp() override {
+    referee_port = FreeUdpPort();
+    transport::MulticastSender::Options o;
+    o.group = "224.5.23.1";
+    o.port = referee_port;
+    o.interfaces = {"127.0.0.1"};
+    o.local_only = true;
+    o.name = "test referee";
+    referee = std::make_unique<transport::MulticastSender>(o);
+  }
+  void BuildWithReferee(const std::string& more = "") {
+    Build(R"({"port": 0, "rate": 200, "referee_port": )" + std::to_string(referee_port) + more + "}",
+          /*local_only=*/true);
+  }
+  // Sends `message` until the page has a referee message (a datagram may be lost, even on
+  // loopback); states come every 5 ms, so 20 of them is ~0.1 s per try.
+  std::optional<rapidjson::Document> SendUntilShown(WsClient& page, const std::string& bytes) {
+    for (int i = 0; i < 50; ++i) {
+      EXPECT_TRUE(referee->Send(Bytes(bytes))) << referee->LastError();
+      if (auto d = page.TryReadType("referee", 20)) return d;
+    }
+    return std::nullopt;
+  }
+};
+
+TEST_F(ViewerMatch, APageGetsTheRefereeAsATeamDoesInSiUnits) {
+  BuildWithReferee();
+  WsClient page(port);
+  const rapidjson::Document hello = page.ReadType("hello");
+  EXPECT_EQ(std::string(hello["referee"].GetString()), "224.5.23.1:" + std::to_string(referee_port));
+
+  // Garbage on the referee's port is counted and logged, and changes nothing.
+  const std::string garbage = "not a referee message";
+  ASSERT_TRUE(referee->Send(Bytes(garbage)));
+  const auto shown = SendUntilShown(page, ubersim::testing::StopRefereeDatagram("ER-Force", "TIGERs", 120'000'000));
+  ASSERT_TRUE(shown.has_value()) << "no referee message reached the page; log:\n" << log_text.str();
+  const rapidjson::Document& d = *shown;
+  EXPECT_STREQ(d["stage"].GetString(), "NORMAL_FIRST_HALF");
+  EXPECT_DOUBLE_EQ(d["stage_time_left"].GetDouble(), 120.0);
+  EXPECT_STREQ(d["command"].GetString(), "STOP");
+  EXPECT_EQ(d["command_counter"].GetUint(), 3u);
+  EXPECT_STREQ(d["next_command"].GetString(), "DIRECT_FREE_YELLOW");
+  EXPECT_DOUBLE_EQ(d["designated_position"]["x"].GetDouble(), -1.2);
+  EXPECT_DOUBLE_EQ(d["designated_position"]["y"].GetDouble(), 0.8);
+  EXPECT_STREQ(d["yellow"]["name"].GetString(), "ER-Force");
+  EXPECT_EQ(d["yellow"]["score"].GetUint(), 1u);
+  EXPECT_STREQ(d["blue"]["name"].GetString(), "TIGERs");
+  EXPECT_EQ(d["blue"]["yellow_cards"].GetUint(), 1u);
+  EXPECT_DOUBLE_EQ(d["blue"]["yellow_card_times"][0].GetDouble(), 45.0);
+  EXPECT_STREQ(d["game_event"]["type"].GetString(), "BALL_LEFT_FIELD_TOUCH_LINE");
+  EXPECT_STREQ(d["game_event"]["by_team"].GetString(), "blue");
+  EXPECT_NE(log_text.str().find("referee datagram ignored: not a Referee message (21 bytes)"), std::string::npos)
+      << log_text.str();
+
+  // The status says how long ago the referee spoke.
+  const rapidjson::Document state = page.ReadType("state");
+  ASSERT_TRUE(state["status"]["referee_age"].IsNumber());
+  EXPECT_LT(state["status"]["referee_age"].GetDouble(), 5.0);
+
+  // A page that connects now gets the match at once, right after the hello.
+  WsClient late(port);
+  EXPECT_STREQ(Parse(late.Read())["type"].GetString(), "hello");
+  const rapidjson::Document caught_up = Parse(late.Read());
+  EXPECT_STREQ(caught_up["type"].GetString(), "referee");
+  EXPECT_STREQ(caught_up["yellow"]["name"].GetString(), "ER-Force");
+}
+
+TEST_F(ViewerMatch, ABurstOfRefereeMessagesReachesThePageRateLimitedNewestLast) {
+  BuildWithReferee();
+  WsClient page(port);
+  page.ReadType("hello");
+  ASSERT_TRUE(SendUntilShown(page, ubersim::testing::StopRefereeDatagram("Yellow", "Blue", 120'000'000)).has_value())
+      << log_text.str();
+  // 30 changes within a few milliseconds: the page gets a few, the last of them the newest.
+  for (int i = 1; i <= 30; ++i) {
+    const std::string bytes = ubersim::testing::StopRefereeDatagram("Yellow", "Blue", 120'000'000 - i * 25'000);
+    ASSERT_TRUE(referee->Send(Bytes(bytes)));
+  }
+  const double newest = (120'000'000 - 30 * 25'000) * 1e-6;
+  int referees = 0;
+  bool seen_newest = false;
+  for (int i = 0; i < 1000 && !seen_newest; ++i) {  // ~5 s of states
+    const rapidjson::Document d = Parse(page.Read());
+    if (std::string(d["type"].GetString()) != "referee") continue;
+    ++referees;
+    seen_newest = std::abs(d["stage_time_left"].GetDouble() - newest) < 1e-9;
+  }
+  EXPECT_TRUE(seen_newest);
+  EXPECT_LE(referees, 5) << "at most one per 100 ms (and the newest after the burst)";
+}
+
+TEST_F(ViewerMatch, WithoutShowRefereeThereIsNoMatchAndABadGroupIsRefused) {
+  BuildWithReferee(R"(, "show_referee": false)");
+  WsClient page(port);
+  const rapidjson::Document hello = page.ReadType("hello");
+  EXPECT_TRUE(hello["referee"].IsNull());
+  ASSERT_TRUE(referee->Send(Bytes(ubersim::testing::StopRefereeDatagram("Y", "B", 60'000'000))));
+  EXPECT_FALSE(page.TryReadType("referee", 40).has_value());
+  page.ws.close(websocket::close_code::normal);
+  world.reset();
+
+  const kernel::ModelLoader loader(kernel::ModelLoader::DefaultSchemaDir(),
+                                   [this](PluginKind k, const std::string& id) {
+                                     return registry.Find(k, id).schema_json;
+                                   });
+  kernel::WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml");
+  model.transports.clear();
+  model.transports.push_back(kernel::TransportModel{
+      "viewer", ParamView::FromJson(R"({"port": 0, "referee_address": "127.0.0.1"})")});
+  model.local_only = true;
+  try {
+    kernel::World w(model, registry, log);
+    FAIL() << "a unicast referee_address was taken";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("referee_address"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not an IPv4 multicast group"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -219,7 +219,7 @@ void SampleSnapshot(const WorldSnapshot& s, WorldSample& out) {
 }
 
 std::string EncodeHello(const std::string& world, double rate, const FieldGeometry& field,
-                        const std::vector<CameraInfo>& cameras) {
+                        const std::vector<CameraInfo>& cameras, const std::string& referee) {
   rapidjson::StringBuffer buffer;
   Writer w(buffer);
   w.SetMaxDecimalPlaces(6);
@@ -245,6 +245,8 @@ std::string EncodeHello(const std::string& world, double rate, const FieldGeomet
     w.EndObject();
   }
   w.EndArray();
+  w.Key("referee");
+  if (referee.empty()) w.Null(); else w.String(referee.c_str());
   w.EndObject();
   return buffer.GetString();
 }
@@ -360,6 +362,8 @@ std::string EncodeState(const WorldSample& s, const std::vector<VisionFrame>& fr
   w.Bool(status.paused);
   w.Key("speed");
   if (status.speed_factor) w.Double(*status.speed_factor); else w.Null();
+  w.Key("referee_age");
+  if (status.referee_age) w.Double(*status.referee_age); else w.Null();
   w.EndObject();
   w.EndObject();
   return buffer.GetString();

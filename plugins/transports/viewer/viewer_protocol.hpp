@@ -59,11 +59,14 @@ struct ViewerStatus {
   int clients = 0;                     ///< connected browsers
   bool paused = false;                 ///< sim time stands still
   std::optional<double> speed_factor;  ///< last speed set through the viewer (0: as fast as possible)
+  std::optional<double> referee_age;   ///< wall s since the last Referee message, none before the first
 };
 
-/// The hello message: world name, sample rate, field geometry and cameras.
+/// The hello message: world name, sample rate, field geometry and cameras, and where the viewer
+/// listens for the referee ("224.5.23.1:10003"; empty: it does not, and the page shows no match).
+/// The match itself comes in "referee" messages (viewer_referee.hpp).
 std::string EncodeHello(const std::string& world, double rate, const FieldGeometry& field,
-                        const std::vector<CameraInfo>& cameras);
+                        const std::vector<CameraInfo>& cameras, const std::string& referee = {});
 
 /// The state message: the sample, each camera's latest frame and the status.
 std::string EncodeState(const WorldSample& sample, const std::vector<VisionFrame>& frames,

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "viewer_server.hpp"
 
+#include <algorithm>
+#include <array>
 #include <deque>
 #include <utility>
 #include <optional>
@@ -76,8 +78,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     ws_.async_accept(request, beast::bind_front_handler(&WsSession::OnAccept, shared_from_this()));
   }
 
-  void SetLatest(std::shared_ptr<const std::string> message) {
-    latest_ = std::move(message);
+  void SetLatest(std::shared_ptr<const std::string> message, ViewerServer::Channel channel) {
+    latest_[static_cast<int>(channel)] = std::move(message);
     Write();
   }
 
@@ -93,6 +95,9 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     server_.clients.fetch_add(1);
     registered_ = true;
     Queue(server_.callbacks.hello());
+    if (server_.callbacks.catch_up) {
+      for (std::string& m : server_.callbacks.catch_up()) Queue(std::move(m));
+    }
     Read();
   }
 
@@ -143,11 +148,11 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (!replies_.empty()) {
       current_ = std::move(replies_.front());
       replies_.pop_front();
-    } else if (latest_) {
-      current_ = std::move(latest_);
-      latest_.reset();
     } else {
-      return;
+      auto waiting = std::find_if(latest_.begin(), latest_.end(), [](const auto& m) { return m != nullptr; });
+      if (waiting == latest_.end()) return;
+      current_ = std::move(*waiting);
+      waiting->reset();
     }
     writing_ = true;
     ws_.async_write(asio::buffer(*current_),
@@ -168,7 +173,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   ViewerServer::Impl& server_;
   beast::flat_buffer in_;
   std::deque<std::shared_ptr<const std::string>> replies_;
-  std::shared_ptr<const std::string> latest_;
+  std::array<std::shared_ptr<const std::string>, ViewerServer::kChannels> latest_;  // by channel
   std::shared_ptr<const std::string> current_;
   bool writing_ = false;
   bool registered_ = false;
@@ -348,9 +353,9 @@ void ViewerServer::Start() {
   thread_ = std::thread([impl = impl_.get()] { impl->io.run(); });
 }
 
-void ViewerServer::Broadcast(std::shared_ptr<const std::string> message) {
-  asio::post(impl_->io, [impl = impl_.get(), message = std::move(message)] {
-    for (WsSession* s : impl->sessions) s->SetLatest(message);
+void ViewerServer::Broadcast(std::shared_ptr<const std::string> message, Channel channel) {
+  asio::post(impl_->io, [impl = impl_.get(), message = std::move(message), channel] {
+    for (WsSession* s : impl->sessions) s->SetLatest(message, channel);
   });
 }
 

@@ -2,9 +2,10 @@
 // The viewer's HTTP + WebSocket server (Boost.Beast), on one thread of its own.
 //
 // HTTP GET serves the page's built-in files and /api/state (the latest state message); a
-// WebSocket at /ws gets the hello message, then state messages. A browser that reads slowly only
-// ever has the newest state waiting for it (older ones are replaced, never queued), so neither
-// memory nor the simulation thread pays for a slow or vanished client.
+// WebSocket at /ws gets the hello message, then state (and referee) messages. A browser that
+// reads slowly only ever has the newest message of each channel waiting for it (older ones are
+// replaced, never queued), so neither memory nor the simulation thread pays for a slow or
+// vanished client, and a state message never pushes out a referee message that is still waiting.
 #pragma once
 
 #include <atomic>
@@ -15,6 +16,7 @@
 #include <string>
 #include <string_view>
 #include <thread>
+#include <vector>
 
 #include <ubersim/log.hpp>
 
@@ -33,6 +35,7 @@ class ViewerServer {
   /// What the server asks its owner; all called on the server's thread.
   struct Callbacks {
     std::function<std::string()> hello;                         ///< first message to a new client
+    std::function<std::vector<std::string>()> catch_up;         ///< then these (may be unset or empty)
     std::function<std::string(std::string_view)> on_message;    ///< a page's message → reply ("" for none)
     std::function<std::string()> latest_state;                  ///< body of GET /api/state
     std::function<void()> tick;                                 ///< called every tick period
@@ -48,8 +51,13 @@ class ViewerServer {
 
   /// Starts the server thread.
   void Start();
-  /// Hands every client this state message (any thread; replaces the one still waiting).
-  void Broadcast(std::shared_ptr<const std::string> message);
+  /// Kinds of broadcast messages: each browser holds at most one waiting per channel, and they
+  /// are written in this order (after the replies to its commands).
+  enum class Channel { kHello, kReferee, kState };
+  static constexpr int kChannels = 3;
+
+  /// Hands every client this message (any thread; replaces the one of its channel still waiting).
+  void Broadcast(std::shared_ptr<const std::string> message, Channel channel = Channel::kState);
   /// Connected WebSocket clients.
   int Clients() const;
   /// The port it listens on (the chosen one when Options::port was 0).

@@ -7,6 +7,10 @@
 // wall-clock second, and each camera frame's detections; encoding and sending happen on the
 // server's own thread, which also keeps only the newest message for a slow browser. So the
 // viewer costs the physics the same whether no browser, a fast one or a stalled one is connected.
+//
+// The match: like a team's software, the viewer listens for the league's Referee messages (the
+// game controller's, or `ubersim run --referee builtin`'s) on their multicast group, and relays
+// the match state to the browsers when it changes, at most ten times a second.
 #include <atomic>
 #include <chrono>
 #include <deque>
@@ -14,18 +18,25 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
+#include <vector>
 
 #include <ubersim/ubersim.hpp>
 
+#include "multicast_receiver.hpp"
+#include "transport_common/network.hpp"
 #include "transport_common/reject_log.hpp"
 #include "ubersim_plugin_schema.hpp"
 #include "viewer_protocol.hpp"
+#include "viewer_referee.hpp"
 #include "viewer_server.hpp"
 
 namespace {
 
 using ubersim::viewer::CommandLimits;
+using ubersim::viewer::MulticastReceiver;
+using ubersim::viewer::RefereeRelay;
 using ubersim::viewer::ViewerServer;
 using ubersim::viewer::ViewerStatus;
 using ubersim::viewer::WorldSample;
@@ -37,6 +48,8 @@ constexpr auto kPausedAfter = std::chrono::milliseconds(500);
 constexpr auto kRefreshWhilePaused = std::chrono::milliseconds(250);
 // Window of the real-time factor and the vision rate.
 constexpr auto kRateWindow = std::chrono::seconds(1);
+// The game controller sends 40 Referee messages a second; a scoreboard reads well at 10.
+constexpr auto kRefereeInterval = std::chrono::milliseconds(100);
 
 class ViewerTransport final : public ubersim::Transport {
  public:
@@ -60,13 +73,22 @@ class ViewerTransport final : public ubersim::Transport {
     context_ = &ctx;
     rate_ = rate;
     field_name_ = field.name;
-    hello_ = ubersim::viewer::EncodeHello(ctx.WorldName(), rate, field, ctx.Cameras());
     refusals_ = std::make_unique<ubersim::transport::RejectLog>(ctx.Logger(), "viewer command refused");
+    if (p.GetBool("show_referee", true)) OpenReferee(ctx);
+    hello_ = ubersim::viewer::EncodeHello(ctx.WorldName(), rate, field, ctx.Cameras(), referee_source_);
 
     ViewerServer::Callbacks callbacks;
     callbacks.hello = [this] {
       std::lock_guard lock(mutex_);
       return hello_;
+    };
+    callbacks.catch_up = [this] {
+      // A page that connects mid-match sees the score at once, not at the next change.
+      std::vector<std::string> out;
+      if (relay_) {
+        if (auto latest = relay_->Latest()) out.push_back(*latest);
+      }
+      return out;
     };
     callbacks.on_message = [this](std::string_view text) { return OnMessage(text); };
     callbacks.latest_state = [this] { return EncodeLatest(); };
@@ -77,6 +99,7 @@ class ViewerTransport final : public ubersim::Transport {
       throw ubersim::PluginError(e.what());
     }
     server_->Start();
+    if (referee_receiver_) referee_receiver_->Start();
   }
 
   void Publish(const ubersim::WorldSnapshot& snapshot) override {
@@ -98,14 +121,14 @@ class ViewerTransport final : public ubersim::Transport {
   void FieldChanged(const ubersim::FieldGeometry& field) {
     field_name_ = field.name;
     auto hello = std::make_shared<const std::string>(
-        ubersim::viewer::EncodeHello(context_->WorldName(), rate_, field, context_->Cameras()));
+        ubersim::viewer::EncodeHello(context_->WorldName(), rate_, field, context_->Cameras(), referee_source_));
     {
       std::lock_guard lock(mutex_);
       hello_ = *hello;
       limits_.half_length = 0.5 * field.carpet_length;
       limits_.half_width = 0.5 * field.carpet_width;
     }
-    if (server_) server_->Broadcast(hello);
+    if (server_) server_->Broadcast(hello, ViewerServer::Channel::kHello);
   }
 
   void OnVisionFrame(const ubersim::VisionFrame& frame) override {
@@ -121,8 +144,10 @@ class ViewerTransport final : public ubersim::Transport {
   }
 
   void Stop() override {
+    if (referee_receiver_) referee_receiver_->Stop();  // first: its datagrams end in Broadcast
     if (server_) server_->Stop();
     if (refusals_) refusals_->Flush();
+    if (referee_rejects_) referee_rejects_->Flush();
   }
 
  private:
@@ -135,6 +160,48 @@ class ViewerTransport final : public ubersim::Transport {
     std::int64_t sim_time_ns;
     std::uint64_t frames;
   };
+
+  // Opens the referee's group as a team's software does: on loopback, and on the default route's
+  // interface unless the world is local-only. A socket that cannot be opened costs the match
+  // display, not the viewer (a warning says why); a setting that is wrong stops the start.
+  void OpenReferee(ubersim::TransportContext& ctx) {
+    const ubersim::ParamView& p = ctx.Params();
+    MulticastReceiver::Options o;
+    o.group = p.GetString("referee_address", o.group);
+    o.port = static_cast<std::uint16_t>(p.GetInt("referee_port", o.port));
+    o.name = "viewer referee";
+    if (!MulticastReceiver::IsIpv4Group(o.group)) {
+      throw p["referee_address"].Error("'" + o.group + "' is not an IPv4 multicast group (the league's: 224.5.23.1)");
+    }
+    o.interfaces = ubersim::transport::ResolveAddresses({"auto"}, ctx.LocalOnly());
+    referee_rejects_ = std::make_unique<ubersim::transport::RejectLog>(ctx.Logger(), "referee datagram ignored");
+    relay_ = std::make_unique<RefereeRelay>(kRefereeInterval, [this](std::shared_ptr<const std::string> json) {
+      if (server_) server_->Broadcast(std::move(json), ViewerServer::Channel::kReferee);
+    });
+    try {
+      referee_receiver_ = std::make_unique<MulticastReceiver>(
+          o,
+          [this](std::span<const std::uint8_t> bytes) {
+            if (!relay_->OnDatagram(bytes, SteadyClock::now())) {
+              referee_rejects_->Reject("not a Referee message (" + std::to_string(bytes.size()) + " bytes)");
+            }
+          },
+          [this](const std::string& reason) { referee_rejects_->Reject(reason); });
+    } catch (const std::exception& e) {
+      ctx.Logger().Warning(std::string("no match display: ") + e.what());
+      relay_.reset();
+      return;
+    }
+    std::string joined;
+    for (const std::string& a : referee_receiver_->Joined()) {
+      joined += (joined.empty() ? "" : ", ") + ubersim::transport::DescribeAddress(a);
+    }
+    for (const std::string& f : referee_receiver_->JoinFailures()) {
+      ctx.Logger().Warning("referee group " + o.group + " not joined on " + f);
+    }
+    referee_source_ = o.group + ":" + std::to_string(referee_receiver_->Port());
+    ctx.Logger().Info("shows the match from the referee on " + referee_source_ + " (joined on " + joined + ")");
+  }
 
   // Server thread: a page's command → events, and the reply.
   std::string OnMessage(std::string_view text) {
@@ -157,6 +224,7 @@ class ViewerTransport final : public ubersim::Transport {
   // Server thread, every sample period: the status, then the state to every browser.
   void Tick() {
     const auto now = SteadyClock::now();
+    if (relay_) relay_->Tick(now);  // a referee message held back by the rate limit
     WorldSample sample;
     std::vector<ubersim::VisionFrame> frames;
     std::uint64_t frames_received = 0;
@@ -199,6 +267,9 @@ class ViewerTransport final : public ubersim::Transport {
     status.clients = server_->Clients();
     status.paused = now - last_time_change_ > kPausedAfter;
     status.speed_factor = speed_factor_;
+    if (const auto last = relay_ ? relay_->LastReceived() : std::nullopt) {
+      status.referee_age = std::chrono::duration<double>(now - *last).count();
+    }
     {
       std::lock_guard lock(mutex_);
       status_ = status;
@@ -254,6 +325,9 @@ class ViewerTransport final : public ubersim::Transport {
   CommandLimits limits_;  // under mutex_ (the field may change)
   std::string hello_;
   std::unique_ptr<ubersim::transport::RejectLog> refusals_;
+  std::string referee_source_;  // "224.5.23.1:10003", or "" without a referee socket
+  std::unique_ptr<ubersim::transport::RejectLog> referee_rejects_;
+  std::unique_ptr<RefereeRelay> relay_;  // thread-safe: receive thread and server thread
   // Simulation thread only (written by Publish, read by query replies).
   std::string field_name_;
   SteadyClock::time_point next_sample_{};
@@ -276,8 +350,10 @@ class ViewerTransport final : public ubersim::Transport {
   std::optional<double> speed_factor_;
   bool refresh_now_ = false;
   bool refreshed_at_stop_ = false;
-  // Last: stopped (and its thread joined) before the members above are destroyed.
+  // Last: stopped (and their threads joined) before the members above are destroyed; the
+  // referee's receiver before the server its datagrams are broadcast on.
   std::unique_ptr<ViewerServer> server_;
+  std::unique_ptr<MulticastReceiver> referee_receiver_;
 };
 
 }  // namespace
