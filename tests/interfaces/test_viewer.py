@@ -7,7 +7,9 @@ SSL-Vision packets (preset `ideal`: no noise, no drop-outs, no latency, 60 Hz; `
 makes t_capture the simulated time of the frame). The ball is dragged with real pointer input
 (W3C actions in viewport coordinates), the world is paused and resumed with the page's button,
 and a screenshot is saved (to $UBERSIM_TEST_OUTPUT_DIR, or a temporary folder; the path is
-printed).
+printed). The match: a Referee message sent as the game controller sends it (multicast on
+loopback, to the viewer's referee_port) shows in the scoreboard, with the placement target on
+the field.
 
 Without Chromium, chromedriver or Selenium the test is skipped, saying what is missing
 (`./setup.sh` installs them).
@@ -26,6 +28,9 @@ import unittest
 from unittest import mock
 
 import harness
+import ssl_gc_common_pb2 as gc_common_pb
+import ssl_gc_game_event_pb2 as game_event_pb
+import ssl_gc_referee_message_pb2 as referee_pb
 import ssl_simulation_custom_ubersim_pb2 as ubersim_pb
 import ssl_simulation_robot_control_pb2 as robot_pb
 import ssl_simulation_robot_feedback_pb2 as feedback_pb
@@ -48,6 +53,7 @@ except ImportError as e:  # python3-selenium missing (or broken)
 BALL_RGB = (0xff, 0x8a, 0x1f)
 TEAM_RGB = {"blue": (0x2c, 0x6c, 0xff), "yellow": (0xff, 0xd5, 0x1c)}
 
+REFEREE_GROUP = "224.5.23.1"
 VISION_FRAME_RATE = 60.0   # Hz, preset ideal
 STEP = 0.005               # s, the div-b world's physics step (the fast profile)
 ENDPOINT_RE = re.compile(r"(http://127\.0\.0\.1:(\d+)/) \(open it in a browser\)")
@@ -202,11 +208,12 @@ class ViewerInBrowser(unittest.TestCase):
         cls.addClassCleanup(shutil.rmtree, cls.workdir, ignore_errors=True)
         cls.started = time.monotonic()
 
-        vision_port, control_port, cls.blue_port, yellow_port = harness.free_udp_ports(4)
+        vision_port, control_port, cls.blue_port, yellow_port, cls.referee_port = harness.free_udp_ports(5)
         receiver = harness.MulticastReceiver(vision_port)
         cls.addClassCleanup(receiver.close)
         cls.world = harness.World("div-b")
-        cls.world.add_transport("viewer", port=0)
+        # The referee on a port of the test's own: nothing else on this machine publishes there.
+        cls.world.add_transport("viewer", port=0, referee_port=cls.referee_port)
         cls.world.add_transport("ssl_vision", port=vision_port, interface=harness.LOOPBACK, timestamps="sim")
         # A team's software beside the page: commands for a robot the page then shows.
         cls.world.add_transport("ssl_simulation", control_port=control_port, blue_port=cls.blue_port,
@@ -668,6 +675,106 @@ class ViewerInBrowser(unittest.TestCase):
             actions.pointer_action.click()
             actions.perform()
             harness.wait_for(lambda: not panel.is_displayed(), 5.0, what="the panel closed")
+
+    def send_referee_until(self, message, shown, what):
+        """Sends `message` as the game controller does (multicast on loopback, every 0.1 s, as a
+        datagram may be lost) until `shown(page's last referee message)` holds."""
+        data = message.SerializeToString()
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, socket.inet_aton(harness.LOOPBACK))
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, 1)
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
+
+            def arrived():
+                self.sim.assert_running()
+                sock.sendto(data, (REFEREE_GROUP, self.referee_port))
+                ref = self.driver.execute_script("return window.ubersimViewer.referee")
+                return ref if ref and shown(ref) else None
+            return harness.wait_for(arrived, 10.0, interval=0.1, what=what)
+
+    @staticmethod
+    def referee_message(command, counter):
+        """A second-half Referee message, ER-Force (yellow) 2 : 1 TIGERs (blue), blue on the
+        positive half, a yellow card for yellow with 95 s left."""
+        r = referee_pb.Referee()
+        r.packet_timestamp = int(time.time() * 1e6)
+        r.stage = referee_pb.Referee.NORMAL_SECOND_HALF
+        r.stage_time_left = 125_400_000  # µs
+        r.command = command
+        r.command_counter = counter
+        r.command_timestamp = r.packet_timestamp
+        r.blue_team_on_positive_half = True
+        for team, name, score in ((r.yellow, "ER-Force", 2), (r.blue, "TIGERs", 1)):
+            team.name, team.score, team.red_cards, team.yellow_cards = name, score, 0, 0
+            team.timeouts, team.timeout_time, team.goalkeeper, team.foul_counter = 4, 300_000_000, 0, 1
+        r.yellow.yellow_cards = 1
+        r.yellow.yellow_card_times.append(95_000_000)
+        r.yellow.goalkeeper = 1
+        return r
+
+    def test_6_the_scoreboard_shows_the_referee(self):
+        with self.diagnosed():
+            # Listening, nothing heard yet: only the hint.
+            hint = text_of(self.driver, "sb-hint")
+            self.assertIn("no referee", hint)
+            self.assertIn(f"{REFEREE_GROUP}:{self.referee_port}", hint)
+            self.assertFalse(self.driver.find_element(By.ID, "sb-match").is_displayed())
+
+            # A ball placement by blue to (2, -2) m, clear of every robot and the ball.
+            target = (2.0, -2.0)
+            page = self.state()
+            for r in self.driver.execute_script("return window.ubersimViewer.state.robots"):
+                self.assertGreater(math.hypot(r["x"] - target[0], r["y"] - target[1]), 0.4, f"{r} on the target")
+            self.assertGreater(math.hypot(page["ball"]["x"] - target[0], page["ball"]["y"] - target[1]), 0.4)
+            r = self.referee_message(referee_pb.Referee.BALL_PLACEMENT_BLUE, 7)
+            r.next_command = referee_pb.Referee.DIRECT_FREE_BLUE
+            r.current_action_time_remaining = 29_000_000
+            r.designated_position.x, r.designated_position.y = target[0] * 1000, target[1] * 1000  # mm
+            e = r.game_events.add()
+            e.type = game_event_pb.GameEvent.BALL_LEFT_FIELD_TOUCH_LINE
+            e.ball_left_field_touch_line.by_team = gc_common_pb.YELLOW
+            e.ball_left_field_touch_line.by_bot = 3
+            r.status_message = "Ball placement by blue"
+            self.send_referee_until(r, lambda ref: ref["command_counter"] == 7, "the placement on the page")
+
+            harness.wait_for(lambda: self.driver.find_element(By.ID, "sb-match").is_displayed(), 5.0,
+                             what="the scoreboard shown")
+            self.assertEqual(text_of(self.driver, "sb-hint"), "")
+            # Yellow on the negative half: on the left.
+            self.assertIn("ER-Force", text_of(self.driver, "sb-left"))
+            self.assertIn("TIGERs", text_of(self.driver, "sb-right"))
+            self.assertEqual(text_of(self.driver, "sb-score"), "2 : 1")
+            self.assertEqual(text_of(self.driver, "sb-stage"), "2nd half")
+            self.assertEqual(text_of(self.driver, "sb-clock"), "02:05")
+            self.assertEqual(text_of(self.driver, "sb-command"), "Ball placement blue")
+            self.assertEqual(text_of(self.driver, "sb-next"), "next: Free kick blue")
+            self.assertEqual(text_of(self.driver, "sb-action"), "action 29.0 s")
+            self.assertIn("1 (01:35)", text_of(self.driver, "sb-left"), "the yellow card's time left")
+            self.assertEqual(text_of(self.driver, "sb-event"), "last event: Ball left field touch line · yellow 3")
+            self.assertEqual(text_of(self.driver, "sb-status"), "Ball placement by blue")
+            yellow = self.driver.find_element(By.CSS_SELECTOR, "#sb-left .sb-name.yellow")
+            self.assertEqual(yellow.value_of_css_property("background-color"), "rgba(255, 213, 28, 1)")
+
+            # The target on the field: where the page's transform puts (2, -2) m, in blue.
+            drawn = harness.wait_for(lambda: self.state()["drawn"]["target"], 5.0, what="the target drawn")
+            self.assertAlmostEqual(drawn["x"], target[0], delta=1e-6)
+            self.assertAlmostEqual(drawn["y"], target[1], delta=1e-6)
+            self.assertEqual(drawn["text"], "ball placement blue")
+            cx, cy = self.to_client(*target)
+            self.assertAlmostEqual(drawn["cx"], cx, delta=0.01)
+            self.assertAlmostEqual(drawn["cy"], cy, delta=0.01)
+            self.assertTrue(close_colour(self.pixel(cx, cy), TEAM_RGB["blue"]), f"target centre {self.pixel(cx, cy)}")
+            path = os.path.join(output_directory(), "viewer-match.png")
+            self.assertTrue(self.driver.save_screenshot(path))
+            print(f"\nscoreboard: {text_of(self.driver, 'scoreboard')!r}; screenshot {path}")
+
+            # Play resumes: no target, the event stays as the last one (dimmed).
+            self.send_referee_until(self.referee_message(referee_pb.Referee.NORMAL_START, 8),
+                                    lambda ref: ref["command_counter"] == 8, "the normal start on the page")
+            harness.wait_for(lambda: self.state()["drawn"]["target"] is None, 5.0, what="the target gone")
+            self.assertEqual(text_of(self.driver, "sb-command"), "Normal start")
+            self.assertEqual(text_of(self.driver, "sb-next"), "")
+            self.assertIn("old", self.driver.find_element(By.ID, "sb-event").get_attribute("class"))
 
     def test_9_no_errors_in_the_console(self):
         with self.diagnosed():

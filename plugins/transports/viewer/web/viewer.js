@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // viewer.js: the WebSocket link to the ÜberSim server, drawing of the latest state, toolbar,
-// status bar, keyboard and pointer gestures. Geometry and the field layer live in field.js.
+// status bar, keyboard and pointer gestures. Geometry and the field layer live in field.js, the
+// match (scoreboard, placement target) in match.js.
 // Frames are drawn on requestAnimationFrame only when a new state arrived or the user acted.
 'use strict';
 (function () {
   const F = window.UberSimField;
+  const M = window.UberSimMatch;
   const $ = (id) => document.getElementById(id);
   const canvas = $('field');
   const ctx = canvas.getContext('2d');
@@ -31,7 +33,7 @@
   let dpr = 1;
 
   const api = {
-    connected: false, hello: null, state: null, drawn: null, frames: 0, selected: null,
+    connected: false, hello: null, state: null, referee: null, drawn: null, frames: 0, selected: null,
     fieldToClient, clientToField, send,
     render: () => requestRender(),
   };
@@ -54,6 +56,7 @@
     ws = sock;
     sock.onopen = () => {
       api.connected = true;
+      api.referee = null;  // the server sends its latest right after the hello
       everConnected = true;
       setConnection('connected', true);
       requestRender();
@@ -94,6 +97,7 @@
     if (!m || typeof m !== 'object') return;
     if (m.type === 'hello') onHello(m);
     else if (m.type === 'state') onState(m);
+    else if (m.type === 'referee') onReferee(m);
     else if (m.type === 'error') showError(`${m.cmd || 'command'}: ${m.message || 'failed'}`);
   }
 
@@ -106,7 +110,14 @@
     trails.clear();
     lastSig = '';
     $('world').textContent = m.world ? String(m.world) : '';
+    M.update(m, api.referee, api.state && api.state.status);
     requestRender();
+  }
+
+  function onReferee(m) {
+    api.referee = m;
+    M.update(api.hello, m, api.state && api.state.status);
+    requestRender();  // the placement target
   }
 
   let lastSig = '';
@@ -115,6 +126,7 @@
     recordTrails(s);
     updateStatus(s);
     updatePanel(s);
+    M.update(api.hello, api.referee, s.status);  // the hint: how long the referee has been silent
     // A paused simulation keeps sending the same state: redraw only when something moved.
     const frames = Array.isArray(s.vision) ? s.vision.map((v) => v && v.frame) : [];
     const sig = `${s.step}|${JSON.stringify(s.ball)}|${JSON.stringify(s.robots)}|${frames}`;
@@ -400,7 +412,7 @@
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     const b = canvas.getBoundingClientRect();
     const s = api.state;
-    const drawn = { t: s && Number.isFinite(s.t) ? s.t : null, ball: null, robots: [] };
+    const drawn = { t: s && Number.isFinite(s.t) ? s.t : null, ball: null, robots: [], target: null };
     const showCams = $('cameras').checked;
 
     if (s) {
@@ -436,6 +448,9 @@
           ctx.stroke();
         });
       }
+      // Under the robots and the ball: they may stand on it.
+      const target = M.drawTarget(ctx, view, api.referee, TEAM_FILL, label);
+      if (target) drawn.target = Object.assign(target, { cx: b.left + target.sx, cy: b.top + target.sy });
       const ballShown = ball ? drawBallShadow(ball) : null;
       robots.forEach((r, i) => {
         const p = places[i];
