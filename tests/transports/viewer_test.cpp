@@ -475,8 +475,9 @@ struct ViewerWorld : ::testing::Test {
 
   void SetUp() override { Build(R"({"port": 0, "rate": 200})"); }
 
-  // The Div B world with only a viewer of these parameters; `local_only` as `--local-only`.
-  void Build(const std::string& viewer_params, bool local_only = false) {
+  // The Div B world with only a viewer of these parameters, local-only (as `--local-only`: the
+  // viewer's referee socket joins its group on loopback alone, never on a real interface).
+  void Build(const std::string& viewer_params) {
     const kernel::ModelLoader loader(kernel::ModelLoader::DefaultSchemaDir(),
                                      [this](PluginKind k, const std::string& id) {
                                        return registry.Find(k, id).schema_json;
@@ -484,7 +485,7 @@ struct ViewerWorld : ::testing::Test {
     kernel::WorldModel model = loader.LoadWorld(UBERSIM_SOURCE_DIR "/models/worlds/div-b.yaml");
     model.transports.clear();
     model.transports.push_back(kernel::TransportModel{"viewer", ParamView::FromJson(viewer_params)});
-    model.local_only = local_only;
+    model.local_only = true;
     world = std::make_unique<kernel::World>(model, registry, log);
     const std::vector<std::string> endpoints = world->TransportEndpoints();
     ASSERT_EQ(endpoints.size(), 1u);
@@ -644,8 +645,7 @@ struct ViewerMatch : ViewerWorld {
     referee = std::make_unique<transport::MulticastSender>(o);
   }
   void BuildWithReferee(const std::string& more = "") {
-    Build(R"({"port": 0, "rate": 200, "referee_port": )" + std::to_string(referee_port) + more + "}",
-          /*local_only=*/true);
+    Build(R"({"port": 0, "rate": 200, "referee_port": )" + std::to_string(referee_port) + more + "}");
   }
   // Sends `message` until the page has a referee message (a datagram may be lost, even on
   // loopback); states come every 5 ms, so 20 of them is ~0.1 s per try.
