@@ -250,6 +250,7 @@ int MatchCommand(const std::vector<std::string>& args) {
   if (!referee_given && f.match.referee == "none") f.match.referee = "builtin";
   if (f.match.referee == "none") throw UsageError("--referee none: a match needs a referee (builtin or gc)");
   f.overrides.local_only = vm.count("local-only") > 0;
+  if (!vm["referee-port"].defaulted()) f.overrides.viewer_referee_port = f.match.referee_port;
   for (const char* port : {"vision", "control", "blue", "yellow", "grsim", "viewer"}) {
     if (vm.count(std::string(port) + "-port")) f.overrides.ports[port] = vm[std::string(port) + "-port"].as<int>();
   }

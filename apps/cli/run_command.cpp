@@ -115,6 +115,7 @@ LogLevel LogLevelOf(const std::string& name) {
 void ApplyFlags(RunFlags& f, const po::variables_map& vm, WorldModel& model, const WorldLoading& loading) {
   f.overrides.local_only = vm.count("local-only") > 0;
   f.match.FromWorld(model.match, vm);
+  if (!vm["referee-port"].defaulted()) f.overrides.viewer_referee_port = f.match.referee_port;
   for (const char* port : {"vision", "control", "blue", "yellow", "grsim", "viewer"}) {
     if (vm.count(std::string(port) + "-port")) f.overrides.ports[port] = vm[std::string(port) + "-port"].as<int>();
   }

@@ -143,6 +143,11 @@ std::vector<std::string> ApplyRunOverrides(const RunOverrides& o, WorldModel& wo
   if (!o.vision_address.empty()) {
     SetTransportParam(world, registry, "vision-address", "ssl_vision", "address", Text(o.vision_address));
   }
+  const bool has_viewer = std::any_of(world.transports.begin(), world.transports.end(),
+                                      [](const TransportModel& t) { return t.plugin == "viewer"; });
+  if (o.viewer_referee_port && has_viewer) {
+    SetTransportParam(world, registry, "referee-port", "viewer", "referee_port", Integer(*o.viewer_referee_port));
+  }
   return notes;
 }
 

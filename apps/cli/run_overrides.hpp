@@ -5,6 +5,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -29,6 +30,9 @@ struct RunOverrides {
   std::map<std::string, int> ports;
   std::string vision_address;  ///< the vision's multicast group (or unicast address)
   bool local_only = false;     ///< every transport on loopback
+  /// The port the viewer listens for Referee messages on (`--referee-port`, so that it shows the
+  /// match the referee publishes there); nothing when the world starts no viewer.
+  std::optional<int> viewer_referee_port;
 };
 
 /// Applies `overrides` to `world` (transport parameters checked against their plugins' schemas);

@@ -163,6 +163,16 @@ TEST(MatchCommand, AMistypedMatchBlockIsALocatedModelError) {
   fs::remove(world);
 }
 
+TEST(MatchCommand, TheRefereePortMovesTheViewersToo) {
+  // The viewer shows the match the referee publishes, wherever that is.
+  const CliResult r = RunUbersim(
+      "run div-b --local-only --no-transport ssl_simulation --no-transport grsim --vision-port 42920 --viewer-port 42980"
+      " --referee builtin --referee-port 42903 --tracker-port 42910 --fast --duration 0.5 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("transport viewer: shows the match from the referee on 224.5.23.1:42903"), std::string::npos)
+      << r.output;
+}
+
 TEST(MatchCommand, BadUsageNamesWhatIsMissing) {
   const CliResult no_teams = RunUbersim("match div-b --blue true" + Ports(42480));
   EXPECT_EQ(no_teams.exit_code, 2);
