@@ -368,6 +368,40 @@ std::optional<LogRecord> LogReader::Next() {
   return record;
 }
 
+void LogReader::Seek(std::int64_t offset, std::int64_t records_before) {
+  Impl& r = *impl_;
+  if (offset < kHeaderSize || records_before < 0) {
+    throw std::invalid_argument("LogReader::Seek: offset " + std::to_string(offset) + " is before the first record");
+  }
+  r.failure.reset();
+  if (!r.gzip || offset < r.position || !r.error.empty()) {
+    // A plain file goes straight there; gzip starts again from the file's first byte.
+    errno = 0;
+    if (std::fseek(r.file, r.gzip ? 0 : static_cast<long>(offset), SEEK_SET) != 0) {
+      r.Fail(records_before + 1, offset, "cannot seek: " + SystemReason());
+    }
+    std::clearerr(r.file);
+    r.zs.next_in = r.in.data();
+    r.zs.avail_in = 0;
+    r.input_end = false;
+    r.error.clear();
+    r.member_end = true;  // the next Read starts a gzip member
+    r.position = r.gzip ? 0 : offset;
+  }
+  // gzip: decompress up to the offset, discarding.
+  std::vector<char> scratch;
+  while (r.position < offset) {
+    scratch.resize(static_cast<std::size_t>(std::min<std::int64_t>(offset - r.position, kReadChunk)));
+    const std::size_t got = r.Read(scratch.data(), scratch.size());
+    if (got < scratch.size()) {
+      const std::string reason = r.error.empty() ? "the data ends before this record" : r.error;
+      r.records = records_before;
+      r.Fail(records_before + 1, offset, reason);
+    }
+  }
+  r.records = records_before;
+}
+
 const std::string& LogReader::Path() const { return impl_->path; }
 bool LogReader::Compressed() const { return impl_->gzip; }
 std::int64_t LogReader::RecordOffset() const { return impl_->record_offset; }

@@ -119,6 +119,16 @@ class LogReader {
   /// implausible size (> kMaxPayloadSize), a truncated record or damaged gzip data.
   std::optional<LogRecord> Next();
 
+  /// Goes back (or ahead) to the record that begins at `offset` of the uncompressed stream, with
+  /// `records_before` records before it: a place RecordOffset() and Records() - 1 gave for a record
+  /// read earlier (a checkpoint). The next Next() returns that record, numbered records_before + 1.
+  /// A plain file seeks at once; gzip has no random access, so a .gz reads on from where it is to a
+  /// later offset and starts again from the beginning for an earlier one (it decompresses up to
+  /// `offset`). An error Next() threw is forgotten. Throws std::invalid_argument for an offset
+  /// before the first record, and LogFormatError (naming that record) when a .gz ends or is
+  /// damaged before `offset` (a plain file finds out at the next Next()).
+  void Seek(std::int64_t offset, std::int64_t records_before);
+
   const std::string& Path() const;    ///< the file read
   bool Compressed() const;            ///< the file is gzip
   std::int64_t RecordOffset() const;  ///< where the record last returned begins (uncompressed stream)

@@ -591,6 +591,82 @@ TEST(SslLogFormatError, NextThrowsTheSameErrorAgain) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Seek: back to a record read before (how `ubersim replay --viewer --send` jumps).
+
+TEST(SslLogSeek, GoesBackAndAheadToARecordInPlainAndGzipFiles) {
+  for (const char* name : {"seek.log", "seek.log.gz"}) {
+    const fs::path file = TempDir() / name;
+    const auto records = SampleRecords();
+    WriteLog(file, records);
+    std::vector<std::int64_t> offsets;
+    ReadLog(file, &offsets);
+    LogReader reader(file.string());
+    // Every record, in an order that jumps back and ahead: each read whole with its number.
+    for (const std::size_t i : {std::size_t{6}, std::size_t{2}, std::size_t{8}, std::size_t{0}, std::size_t{7},
+                                std::size_t{7}, std::size_t{3}}) {
+      reader.Seek(offsets[i], static_cast<std::int64_t>(i));
+      const auto r = reader.Next();
+      ASSERT_TRUE(r) << name << " record " << i + 1;
+      EXPECT_EQ(r->timestamp_ns, records[i].timestamp_ns) << name << " record " << i + 1;
+      EXPECT_TRUE(r->payload == records[i].payload) << name << " record " << i + 1;
+      EXPECT_EQ(reader.RecordOffset(), offsets[i]);
+      EXPECT_EQ(reader.Records(), static_cast<std::int64_t>(i + 1));
+    }
+    // Read on to the end from there.
+    reader.Seek(offsets[5], 5);
+    std::vector<LogRecord> rest;
+    while (auto r = reader.Next()) rest.push_back(*r);
+    ExpectSameRecords(rest, std::vector<LogRecord>(records.begin() + 5, records.end()));
+    EXPECT_THROW(reader.Seek(3, 0), std::invalid_argument) << name;
+  }
+}
+
+TEST(SslLogSeek, ForgetsAnErrorAndSeesItAgainThere) {
+  for (const char* name : {"seek-cut.log", "seek-cut.log.gz"}) {
+    const fs::path whole = TempDir() / (std::string("whole-") + name);
+    const auto records = SampleRecords();
+    WriteLog(whole, records);
+    std::vector<std::int64_t> offsets;
+    ReadLog(whole, &offsets);
+    // Cut inside the last record's payload (the gzip cut just before its end: the data is cut off).
+    const std::string bytes = ReadBytes(whole);
+    const fs::path file = TempDir() / name;
+    WriteBytes(file, bytes.substr(0, std::string(name).ends_with(".gz") ? bytes.size() - 12 : bytes.size() - 2));
+    LogReader reader(file.string());
+    std::string first;
+    try {
+      while (reader.Next()) {
+      }
+    } catch (const LogFormatError& e) {
+      first = e.what();
+    }
+    ASSERT_FALSE(first.empty()) << name;
+    reader.Seek(offsets[1], 1);
+    const auto r = reader.Next();
+    ASSERT_TRUE(r) << name;
+    EXPECT_EQ(r->payload, records[1].payload);
+    std::string again;
+    try {
+      while (reader.Next()) {
+      }
+    } catch (const LogFormatError& e) {
+      again = e.what();
+    }
+    EXPECT_EQ(again, first) << name;
+    if (std::string(name).ends_with(".gz")) {
+      // A gzip seek decompresses to the offset: past the end of the data, it names that record.
+      try {
+        reader.Seek(static_cast<std::int64_t>(bytes.size()) * 100, 42);
+        FAIL() << "no error";
+      } catch (const LogFormatError& e) {
+        EXPECT_EQ(e.record_number, 43);
+        EXPECT_EQ(e.byte_offset, static_cast<std::int64_t>(bytes.size()) * 100);
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
 // `ubersim replay`, as a user runs it, on loopback only.
 
 // Ports of this test only (4xxxx, not the league's), one set per test so parallel runs keep apart.
