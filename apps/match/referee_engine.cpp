@@ -460,6 +460,29 @@ void RefereeEngine::WatchRunning(const FieldView& v, std::vector<FieldRequest>& 
     Stop(v.t_ns, Direct(kicker), rules_.PlacementAfter(as_line, corner));
     return;
   }
+  // Too many robots: a team with more robots on the field than it may have (the simulator takes
+  // robots off for cards itself: this is a world or a team that put too many on). The game
+  // controller stops and restarts neutrally; raised at most once per 10 s per team.
+  if (!autoref()) {
+    for (Team t : {Team::kBlue, Team::kYellow}) {
+      int on_field = 0;
+      for (const RobotView& r : v.robots) on_field += r.present && r.id.team == t;
+      const int allowed = static_cast<int>(Info(t).max_allowed_bots());
+      const int ti = TeamIndex(t);
+      if (on_field <= allowed || v.t_ns < t_too_many_ns_[ti]) continue;
+      t_too_many_ns_[ti] = v.t_ns + 10 * kNs;
+      GameEvent e;
+      e.set_type(GameEvent::TOO_MANY_ROBOTS);
+      auto* m = e.mutable_too_many_robots();
+      m->set_by_team(WireTeam(t));
+      m->set_num_robots_allowed(allowed);
+      m->set_num_robots_on_field(on_field);
+      Set(m->mutable_ball_location(), v.ball);
+      AddEvent(e);
+      Stop(v.t_ns, Referee::FORCE_START, rules_.ValidFreeKickPoint(v.ball));
+      return;
+    }
+  }
   // No progress: the ball moved less than 0.1 m for 5 s (A) / 10 s (B) while both may play (the
   // game controller detects it itself).
   if (!in_play_ || autoref()) return;
@@ -735,7 +758,9 @@ void RefereeEngine::WatchCards(const FieldView& v, std::vector<FieldRequest>& ou
     for (const RobotView& r : v.robots) {
       present += r.present && r.id.team == t && std::find(off.begin(), off.end(), r.id) == off.end();
     }
-    if (present > static_cast<int>(allowed)) {
+    // Only for cards: a team that simply has too many robots is the TOO_MANY_ROBOTS event's.
+    const std::size_t cards = active.size() + info.red_cards();
+    if (present > static_cast<int>(allowed) && off.size() < cards) {
       const RobotView* pick = nullptr;
       for (const RobotView& r : v.robots) {
         if (!r.present || r.id.team != t || r.id.id == static_cast<int>(info.goalkeeper())) continue;

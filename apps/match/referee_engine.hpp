@@ -165,6 +165,7 @@ class RefereeEngine {
   // Fouls and cards.
   std::vector<std::pair<RobotId, bool>> stop_speed_fouled_;  // robots already fouled for speed in this stoppage
   std::int64_t t_defender_grace_ns_[2] = {0, 0};
+  std::int64_t t_too_many_ns_[2] = {0, 0};  // no TOO_MANY_ROBOTS for the team before then
   std::vector<RobotId> off_for_card_[2];  // robots taken off for a card, in order
   Team kicked_off_first_ = Team::kYellow;
   // Autoreferee.

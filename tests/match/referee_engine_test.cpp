@@ -307,6 +307,33 @@ TEST(BuiltinReferee, ACardTakesTheHighestNonKeeperOffAFullTeamAndBringsItBack) {
   EXPECT_EQ(m.msg().blue().yellow_card_times_size(), 0);
 }
 
+TEST(BuiltinReferee, TooManyRobotsStopsPlayForAForceStartOncePerTenSeconds) {
+  RefereeConfig c;
+  c.division = Division::kB;  // six allowed
+  Match m(c);
+  for (int id = 2; id < 7; ++id) m.view.robots.push_back(Match::Robot(Team::kYellow, id, 3.0, -2.5 + id * 0.5));
+  m.KickOff();  // seven yellow robots: over the limit as soon as play runs
+  EXPECT_EQ(m.msg().command(), Referee::NORMAL_START);
+  m.Run(0.02);
+  ASSERT_EQ(m.msg().command(), Referee::STOP);
+  EXPECT_EQ(m.msg().next_command(), Referee::FORCE_START);
+  ASSERT_EQ(m.msg().game_events_size(), 1);
+  const auto& e = m.msg().game_events(0);
+  EXPECT_EQ(e.type(), GameEvent::TOO_MANY_ROBOTS);
+  EXPECT_EQ(e.too_many_robots().by_team(), ::YELLOW);
+  EXPECT_EQ(e.too_many_robots().num_robots_allowed(), 6);
+  EXPECT_EQ(e.too_many_robots().num_robots_on_field(), 7);
+  ASSERT_TRUE(m.RunUntil(Referee::FORCE_START, 10));
+  m.Run(1.0);  // not raised again within 10 s
+  EXPECT_EQ(m.msg().command(), Referee::FORCE_START);
+  m.view.robots.back().present = false;  // the team took one off
+  m.view.ball = {0.5, 0.5};
+  m.Run(10.0, [&] { m.view.ball.x += 0.001; });
+  const auto too_many = std::count_if(m.referee.history().begin(), m.referee.history().end(),
+                                      [](const GameEvent& g) { return g.type() == GameEvent::TOO_MANY_ROBOTS; });
+  EXPECT_EQ(too_many, 1);
+}
+
 TEST(FieldRulesTest, PlacementPointsFollowTheGameController) {
   const FieldRules rules(DivA());
   // Touch line: 0.2 m in, and at least 0.2 m from the goal lines.
