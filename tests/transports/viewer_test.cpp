@@ -251,6 +251,67 @@ TEST(ViewerProtocol, TheHelloCarriesTheFieldAndCameras) {
   EXPECT_STREQ(with["referee"].GetString(), "224.5.23.1:10003");
 }
 
+// A replay (`ubersim replay --viewer`): the hello names the log, the status says where it stands,
+// and the page's commands are seek, play, pause and speed, nothing that would change a world.
+TEST(ViewerProtocol, AReplaysHelloStatusAndCommands) {
+  FieldGeometry field;
+  field.field_length = 12;
+  ReplayInfo info;
+  info.file = "final.log.gz";
+  info.duration = 600.5;
+  info.start_unix = 1700000000.25;
+  info.sending = true;
+  const rapidjson::Document hello = Parse(EncodeHello("final.log.gz", 60, field, {}, "log", &info));
+  ASSERT_TRUE(hello.HasMember("replay"));
+  EXPECT_STREQ(hello["replay"]["file"].GetString(), "final.log.gz");
+  EXPECT_DOUBLE_EQ(hello["replay"]["duration"].GetDouble(), 600.5);
+  EXPECT_DOUBLE_EQ(hello["replay"]["start_unix"].GetDouble(), 1700000000.25);
+  EXPECT_TRUE(hello["replay"]["sending"].GetBool());
+  EXPECT_DOUBLE_EQ(hello["replay"]["min_speed"].GetDouble(), 0.25);
+  EXPECT_DOUBLE_EQ(hello["replay"]["max_speed"].GetDouble(), 8);
+  EXPECT_FALSE(Parse(EncodeHello("w", 60, field, {}))
+                   .HasMember("replay")) << "a live world's hello has no replay: the page shows no slider";
+
+  ViewerStatus status;
+  EXPECT_FALSE(Parse(EncodeState(WorldSample{}, {}, status))["status"].HasMember("replay"));
+  status.replay = ReplayStatus{12.5, 600.5, 2, true};
+  const rapidjson::Document state = Parse(EncodeState(WorldSample{}, {}, status));
+  const auto& r = state["status"]["replay"];
+  EXPECT_DOUBLE_EQ(r["t"].GetDouble(), 12.5);
+  EXPECT_DOUBLE_EQ(r["duration"].GetDouble(), 600.5);
+  EXPECT_DOUBLE_EQ(r["speed"].GetDouble(), 2);
+  EXPECT_TRUE(r["playing"].GetBool());
+
+  ReplayCommand c = DecodeReplayCommand(R"({"cmd":"seek","t":42.25,"id":3})", info);
+  ASSERT_TRUE(c.error.empty()) << c.error;
+  EXPECT_EQ(c.seek, 42.25);
+  EXPECT_EQ(c.id, 3);
+  EXPECT_FALSE(c.playing || c.speed);
+  EXPECT_EQ(DecodeReplayCommand(R"({"cmd":"seek","t":-1})", info).seek, 0.0) << "clamped to the log";
+  EXPECT_EQ(DecodeReplayCommand(R"({"cmd":"seek","t":1e6})", info).seek, 600.5);
+  EXPECT_EQ(DecodeReplayCommand(R"({"cmd":"play"})", info).playing, true);
+  EXPECT_EQ(DecodeReplayCommand(R"({"cmd":"resume"})", info).playing, true);
+  EXPECT_EQ(DecodeReplayCommand(R"({"cmd":"pause"})", info).playing, false);
+  EXPECT_EQ(DecodeReplayCommand(R"({"cmd":"speed","factor":0.25})", info).speed, 0.25);
+  EXPECT_EQ(DecodeReplayCommand(R"({"cmd":"speed","factor":8})", info).speed, 8.0);
+  const std::pair<const char*, const char*> refused[] = {
+      {"{\"cmd\":\"seek\"", "not JSON"},
+      {"[]", "must be a JSON object"},
+      {"{\"cmd\":\"seek\"}", "'t' is missing"},
+      {"{\"cmd\":\"seek\",\"t\":\"end\"}", "'t' must be a finite number"},
+      {"{\"cmd\":\"speed\",\"factor\":0}", "'factor' must be 0.25 to 8"},
+      {"{\"cmd\":\"speed\",\"factor\":16}", "'factor' must be 0.25 to 8"},
+      {"{\"cmd\":\"move\",\"target\":\"ball\",\"x\":0,\"y\":0}", "a replay shows a log as it was recorded"},
+      {"{\"cmd\":\"reset\"}", "a replay shows a log"},
+      {"{\"cmd\":\"rewind\"}", "unknown command 'rewind' (seek, play, pause, speed)"},
+  };
+  for (const auto& [text, expected] : refused) {
+    c = DecodeReplayCommand(text, info);
+    EXPECT_NE(c.error.find(expected), std::string::npos) << text << " → " << c.error;
+    EXPECT_FALSE(c.seek || c.playing || c.speed) << text;
+  }
+}
+
 // ---------------------------------------------------------------- server
 
 struct HttpResult {

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "viewer_protocol.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <rapidjson/document.h>
 #include <rapidjson/error/en.h>
@@ -219,7 +221,8 @@ void SampleSnapshot(const WorldSnapshot& s, WorldSample& out) {
 }
 
 std::string EncodeHello(const std::string& world, double rate, const FieldGeometry& field,
-                        const std::vector<CameraInfo>& cameras, const std::string& referee) {
+                        const std::vector<CameraInfo>& cameras, const std::string& referee,
+                        const ReplayInfo* replay) {
   rapidjson::StringBuffer buffer;
   Writer w(buffer);
   w.SetMaxDecimalPlaces(6);
@@ -247,6 +250,20 @@ std::string EncodeHello(const std::string& world, double rate, const FieldGeomet
   w.EndArray();
   w.Key("referee");
   if (referee.empty()) w.Null(); else w.String(referee.c_str());
+  if (replay) {
+    w.Key("replay");
+    w.StartObject();
+    w.Key("file");
+    w.String(replay->file.c_str());
+    Number(w, "duration", replay->duration);
+    w.Key("start_unix");
+    w.Double(replay->start_unix);  // full precision: Unix seconds with their fraction
+    w.Key("sending");
+    w.Bool(replay->sending);
+    Number(w, "min_speed", replay->min_speed);
+    Number(w, "max_speed", replay->max_speed);
+    w.EndObject();
+  }
   w.EndObject();
   return buffer.GetString();
 }
@@ -364,6 +381,17 @@ std::string EncodeState(const WorldSample& s, const std::vector<VisionFrame>& fr
   if (status.speed_factor) w.Double(*status.speed_factor); else w.Null();
   w.Key("referee_age");
   if (status.referee_age) w.Double(*status.referee_age); else w.Null();
+  if (status.replay) {
+    const ReplayStatus& r = *status.replay;
+    w.Key("replay");
+    w.StartObject();
+    Number(w, "t", r.t);
+    Number(w, "duration", r.duration);
+    Number(w, "speed", r.speed);
+    w.Key("playing");
+    w.Bool(r.playing);
+    w.EndObject();
+  }
   w.EndObject();
   w.EndObject();
   return buffer.GetString();
@@ -457,6 +485,54 @@ DecodedCommand DecodeCommand(std::string_view text, const CommandLimits& limits)
     out.events.clear();
     out.speed_factor.reset();
     out.paused.reset();
+  }
+  return out;
+}
+
+ReplayCommand DecodeReplayCommand(std::string_view text, const ReplayInfo& replay) {
+  ReplayCommand out;
+  rapidjson::Document doc;
+  doc.Parse(text.data(), text.size());
+  if (doc.HasParseError()) {
+    out.error = std::string("not JSON: ") + rapidjson::GetParseError_En(doc.GetParseError()) +
+                " at offset " + std::to_string(doc.GetErrorOffset());
+    return out;
+  }
+  if (!doc.IsObject()) {
+    out.error = "a command must be a JSON object";
+    return out;
+  }
+  out.id = ReadId(doc);
+  auto cmd = doc.FindMember("cmd");
+  if (cmd == doc.MemberEnd() || !cmd->value.IsString()) {
+    out.error = "'cmd' is missing or not a string";
+    return out;
+  }
+  out.cmd = cmd->value.GetString();
+  const std::string& name = out.cmd;
+  if (name == "seek") {
+    const auto t = ReadNumber(doc, "t", true, out.error);
+    if (t) out.seek = std::clamp(*t, 0.0, replay.duration);  // a slider may round past either end
+  } else if (name == "play" || name == "resume" || name == "pause") {
+    out.playing = name != "pause";
+  } else if (name == "speed") {
+    const auto factor = ReadNumber(doc, "factor", true, out.error);
+    if (factor && (*factor < replay.min_speed || *factor > replay.max_speed)) {
+      char range[64];
+      std::snprintf(range, sizeof range, "%g to %g", replay.min_speed, replay.max_speed);
+      out.error = std::string("'factor' must be ") + range + " (times the recorded rate)";
+    } else if (factor) {
+      out.speed = factor;
+    }
+  } else if (name == "move" || name == "kick" || name == "step" || name == "reset") {
+    out.error = "'" + name + "' changes a world; a replay shows a log as it was recorded (seek, play, pause, speed)";
+  } else {
+    out.error = "unknown command '" + name + "' (seek, play, pause, speed)";
+  }
+  if (!out.error.empty()) {
+    out.seek.reset();
+    out.playing.reset();
+    out.speed.reset();
   }
   return out;
 }

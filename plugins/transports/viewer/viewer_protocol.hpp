@@ -51,6 +51,24 @@ struct WorldSample {
 /// Copies what the page needs out of a snapshot (kept cheap: it runs on the simulation thread).
 void SampleSnapshot(const WorldSnapshot& snapshot, WorldSample& out);
 
+/// A log played back (`ubersim replay FILE --viewer`), in the hello: the page shows its time slider.
+struct ReplayInfo {
+  std::string file;         ///< the log's name
+  double duration = 0;      ///< s from the first record to the last
+  double start_unix = 0;    ///< the first record's time stamp, Unix s
+  bool sending = false;     ///< the records also go onto the network, in step with the slider
+  double min_speed = 0.25;  ///< the speeds the replay accepts
+  double max_speed = 8;
+};
+
+/// Where a replay stands, in the state's status.
+struct ReplayStatus {
+  double t = 0;          ///< s since the log's first record
+  double duration = 0;   ///< s
+  double speed = 1;      ///< times the recorded rate
+  bool playing = false;  ///< time runs (false: paused, or stopped at the end)
+};
+
 /// What the status bar shows.
 struct ViewerStatus {
   double real_time_factor = 0;         ///< sim s per wall s, last second
@@ -60,13 +78,16 @@ struct ViewerStatus {
   bool paused = false;                 ///< sim time stands still
   std::optional<double> speed_factor;  ///< last speed set through the viewer (0: as fast as possible)
   std::optional<double> referee_age;   ///< wall s since the last Referee message, none before the first
+  std::optional<ReplayStatus> replay;  ///< a replay's position (only when replaying a log)
 };
 
 /// The hello message: world name, sample rate, field geometry and cameras, and where the viewer
 /// listens for the referee ("224.5.23.1:10003"; empty: it does not, and the page shows no match).
-/// The match itself comes in "referee" messages (viewer_referee.hpp).
+/// The match itself comes in "referee" messages (viewer_referee.hpp). `replay`: the log a replay
+/// plays (the hello then has a "replay" member; a live world's has none).
 std::string EncodeHello(const std::string& world, double rate, const FieldGeometry& field,
-                        const std::vector<CameraInfo>& cameras, const std::string& referee = {});
+                        const std::vector<CameraInfo>& cameras, const std::string& referee = {},
+                        const ReplayInfo* replay = nullptr);
 
 /// The state message: the sample, each camera's latest frame and the status.
 std::string EncodeState(const WorldSample& sample, const std::vector<VisionFrame>& frames,
@@ -97,5 +118,20 @@ struct CommandLimits {
 
 /// Parses and checks one page message (JSON text); never throws.
 DecodedCommand DecodeCommand(std::string_view text, const CommandLimits& limits);
+
+/// A page's command to a replay: at most one of seek, playing and speed is set.
+struct ReplayCommand {
+  std::string cmd;                 ///< "seek", "play", "pause" or "speed" ("" when unreadable)
+  std::optional<std::int64_t> id;  ///< the page's id, echoed back
+  std::optional<double> seek;      ///< s since the first record, within [0, duration]
+  std::optional<bool> playing;     ///< play (true) or pause (false)
+  std::optional<double> speed;     ///< times the recorded rate
+  std::string error;               ///< non-empty: refused, nothing changes
+};
+
+/// Parses and checks one page message to a replay (JSON text); never throws. "seek" {"t": s}
+/// (clamped to the log), "play" (or "resume"), "pause", "speed" {"factor": f} within the info's
+/// speeds. The live world's commands (move, kick, step, reset) are refused: a log cannot change.
+ReplayCommand DecodeReplayCommand(std::string_view text, const ReplayInfo& replay);
 
 }  // namespace ubersim::viewer
