@@ -376,24 +376,6 @@ void RefereeEngine::WatchRunning(const FieldView& v, std::vector<FieldRequest>& 
   if (const auto exit = rules_.Left(v.ball, v.ball_radius, v.ball_z)) {
     const Team toucher = last_touch_team_;
     GameEvent e;
-    if (exit->kind == Exit::kGoal && autoref()) {
-      // An autoreferee reports a possible goal; the game controller judges and scores it.
-      const Team conceding = GoalSideOf(Team::kBlue) == exit->goal_side ? Team::kBlue : Team::kYellow;
-      const Team scoring = Other(conceding);
-      int on_field = 0;
-      for (const RobotView& r : v.robots) on_field += r.present && r.id.team == scoring;
-      e.set_type(GameEvent::POSSIBLE_GOAL);
-      GameEvent::Goal* g = e.mutable_possible_goal();
-      g->set_by_team(WireTeam(scoring));
-      g->set_kicking_team(WireTeam(toucher));
-      if (last_touch_bot_ >= 0) g->set_kicking_bot(static_cast<unsigned>(last_touch_bot_));
-      Set(g->mutable_location(), exit->location);
-      g->set_max_ball_height(static_cast<float>(max_height_since_touch_[TeamIndex(scoring)]));
-      g->set_num_robots_by_team(static_cast<unsigned>(on_field));
-      AddEvent(e);
-      reported_ = true;
-      return;
-    }
     if (exit->kind == Exit::kGoal) {
       // The ball entered the goal at x sign goal_side: the team defending it concedes.
       const Team conceding = GoalSideOf(Team::kBlue) == exit->goal_side ? Team::kBlue : Team::kYellow;
@@ -403,7 +385,11 @@ void RefereeEngine::WatchRunning(const FieldView& v, std::vector<FieldRequest>& 
       const bool too_high = max_height_since_touch_[TeamIndex(scoring)] > kMaxGoalHeight;
       const bool too_many = on_field > static_cast<int>(Info(scoring).max_allowed_bots());
       GameEvent::Goal* g = nullptr;
-      if (!too_high && !too_many) {
+      if (autoref()) {
+        // An autoreferee reports a possible goal; the game controller judges and scores it.
+        e.set_type(GameEvent::POSSIBLE_GOAL);
+        g = e.mutable_possible_goal();
+      } else if (!too_high && !too_many) {
         e.set_type(GameEvent::GOAL);
         g = e.mutable_goal();
       } else {
@@ -418,6 +404,11 @@ void RefereeEngine::WatchRunning(const FieldView& v, std::vector<FieldRequest>& 
       Set(g->mutable_location(), exit->location);
       g->set_max_ball_height(static_cast<float>(max_height_since_touch_[TeamIndex(scoring)]));
       g->set_num_robots_by_team(static_cast<unsigned>(on_field));
+      if (autoref()) {
+        AddEvent(e);
+        reported_ = true;
+        return;
+      }
       AddEvent(e);
       if (e.type() == GameEvent::GOAL) {
         Info(scoring).set_score(Info(scoring).score() + 1);

@@ -6,10 +6,8 @@
 #include <cmath>
 #include <memory>
 
-#include "match_session.hpp"
-#include "shipped_worlds.hpp"
+#include "refereed_world.hpp"
 #include "standin_game_controller.hpp"
-#include "ubersim/kernel/world.hpp"
 
 namespace ubersim::match {
 namespace {
@@ -26,49 +24,26 @@ bool HasEvent(const std::vector<CiInput>& inputs, GameEvent::Type type) {
   return false;
 }
 
-struct GcMatch {
-  GcMatch() {
-    model = shipped.Load("div-b");
-    world = std::make_unique<kernel::World>(model, shipped.registry, shipped.log, false);
+// Built before the world (a base of its own): the stand-in and what the session published.
+struct GcParts {
+  testing::StandinGameController gc;
+  std::vector<std::string> published;
+};
+
+// The world refereed by the stand-in game controller.
+struct GcMatch : GcParts, RefereedWorld {
+  GcMatch() : GcParts(), RefereedWorld(Options(gc, published)) {}
+  static MatchOptions Options(const testing::StandinGameController& gc, std::vector<std::string>& into) {
     MatchOptions o;
     RefereeConfig c;
     c.division = Division::kB;
     o.referee = c;
     o.game_controller = gc.Address();
-    o.network = false;
-    o.recorder = [this](std::int64_t, WireMessage type, const std::string& bytes) {
-      if (type == WireMessage::kReferee) published.push_back(bytes);
+    o.recorder = [&into](std::int64_t, WireMessage type, const std::string& bytes) {
+      if (type == WireMessage::kReferee) into.push_back(bytes);
     };
-    session = std::make_unique<MatchSession>(*world, o, shipped.log);
+    return o;
   }
-  const Referee& state() const { return session->referee()->message(); }
-  bool StepUntil(const std::function<bool()>& done, double limit) {
-    const std::int64_t end = world->clock().time_ns() + static_cast<std::int64_t>(limit * 1e9);
-    while (world->clock().time_ns() < end) {
-      if (done()) return true;
-      world->Step();
-      session->AfterStep();
-    }
-    return done();
-  }
-  bool StepUntilCommand(Referee::Command c, double limit) {
-    return StepUntil([&] { return state().command() == c; }, limit);
-  }
-  void Shoot(Vec3 from, Vec3 velocity) {
-    PositionEvent e;
-    e.target = Target::Ball();
-    e.position = from;
-    e.velocity = velocity;
-    e.angular_velocity = Vec3::Zero();
-    world->events().Post(e);
-  }
-
-  testing::StandinGameController gc;
-  testing::ShippedWorlds shipped;
-  kernel::WorldModel model;
-  std::unique_ptr<kernel::World> world;
-  std::unique_ptr<MatchSession> session;
-  std::vector<std::string> published;
 };
 
 TEST(GameControllerCi, TheEngineIsTheAutorefereeOfAGameControllerInLockStep) {

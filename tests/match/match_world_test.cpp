@@ -7,59 +7,33 @@
 #include <cmath>
 #include <memory>
 
-#include "match_session.hpp"
-#include "shipped_worlds.hpp"
-#include "ubersim/kernel/world.hpp"
+#include "refereed_world.hpp"
 
 namespace ubersim::match {
 namespace {
 
-struct MatchWorld {
-  explicit MatchWorld(RefereeConfig config) {
-    model = shipped.Load("div-b");
-    world = std::make_unique<kernel::World>(model, shipped.registry, shipped.log, false);
+// Built before the world (a base of its own): the referee's messages as they would be recorded.
+struct RecordedMessages {
+  std::vector<Referee> messages;
+};
+
+// The built-in referee's messages, decoded with the league's schema.
+struct MatchWorld : RecordedMessages, RefereedWorld {
+  explicit MatchWorld(RefereeConfig config) : RecordedMessages(), RefereedWorld(Options(config, messages)) {}
+  static MatchOptions Options(RefereeConfig config, std::vector<Referee>& into) {
     MatchOptions o;
     config.division = Division::kB;
     o.referee = config;
-    o.network = false;
     o.unix_timestamps = false;
-    o.recorder = [this](std::int64_t t, WireMessage type, const std::string& bytes) {
+    o.recorder = [&into](std::int64_t t, WireMessage type, const std::string& bytes) {
       if (type != WireMessage::kReferee) return;
       Referee m;
       ASSERT_TRUE(m.ParseFromString(bytes)) << "at " << t;
-      messages.push_back(m);
+      into.push_back(m);
     };
-    session = std::make_unique<MatchSession>(*world, o, shipped.log);
+    return o;
   }
-  const Referee& msg() const { return session->referee()->message(); }
-  // Steps until `done` (at most `limit` simulated seconds); false if it never held.
-  bool StepUntil(const std::function<bool()>& done, double limit) {
-    const std::int64_t end = world->clock().time_ns() + static_cast<std::int64_t>(limit * 1e9);
-    while (world->clock().time_ns() < end) {
-      if (done()) return true;
-      world->Step();
-      session->AfterStep();
-    }
-    return done();
-  }
-  bool StepUntilCommand(Referee::Command c, double limit) {
-    return StepUntil([&] { return msg().command() == c; }, limit);
-  }
-  // A robot's kick as the ball leaves it: the ball at `from` with `velocity`.
-  void Shoot(Vec3 from, Vec3 velocity) {
-    PositionEvent e;
-    e.target = Target::Ball();
-    e.position = from;
-    e.velocity = velocity;
-    e.angular_velocity = Vec3::Zero();
-    world->events().Post(e);
-  }
-
-  testing::ShippedWorlds shipped;
-  kernel::WorldModel model;
-  std::unique_ptr<kernel::World> world;
-  std::unique_ptr<MatchSession> session;
-  std::vector<Referee> messages;
+  const Referee& msg() const { return state(); }
 };
 
 TEST(BuiltinRefereeInAWorld, GoalTouchLineAndHalfTimeRunAsTheGameControllerWould) {
