@@ -33,6 +33,7 @@
 #include "transport_common/multicast_sender.hpp"
 #include "viewer_protocol.hpp"
 #include "viewer_server.hpp"
+#include "viewer_ws_client.hpp"
 #include "web_assets.hpp"
 
 namespace {
@@ -45,19 +46,9 @@ using tcp = asio::ip::tcp;
 using namespace ubersim;
 using namespace ubersim::viewer;
 
-rapidjson::Document Parse(const std::string& text) {
-  rapidjson::Document d;
-  d.Parse(text.c_str());
-  EXPECT_FALSE(d.HasParseError()) << text;
-  return d;
-}
-
-// Every blocking read gives up after this long, so a broken server fails a test instead of
-// hanging it.
-void ReceiveTimeout(tcp::socket& s, int seconds) {
-  timeval tv{seconds, 0};
-  setsockopt(s.native_handle(), SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-}
+rapidjson::Document Parse(const std::string& text) { return ubersim::testing::ParseJson(text); }
+using ubersim::testing::ReceiveTimeout;
+using ubersim::testing::WsClient;
 
 // ---------------------------------------------------------------- messages
 
@@ -336,40 +327,6 @@ HttpResult HttpRequest(std::uint16_t port, http::verb verb, const std::string& t
   const auto& res = parser.get();
   return HttpResult{res.result_int(), std::string(res[http::field::content_type]), res.body()};
 }
-
-// A page's WebSocket, blocking with a timeout.
-struct WsClient {
-  asio::io_context io;
-  websocket::stream<tcp::socket> ws{io};
-
-  explicit WsClient(std::uint16_t port) {
-    ws.next_layer().connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), port));
-    ReceiveTimeout(ws.next_layer(), 10);
-    ws.handshake("127.0.0.1:" + std::to_string(port), "/ws");
-  }
-  std::string Read() {
-    beast::flat_buffer b;
-    ws.read(b);
-    return beast::buffers_to_string(b.data());
-  }
-  // Reads until a message whose "type" is `type`, at most `limit` messages.
-  std::optional<rapidjson::Document> TryReadType(const std::string& type, int limit) {
-    for (int i = 0; i < limit; ++i) {
-      rapidjson::Document d = Parse(Read());
-      if (d.IsObject() && d.HasMember("type") && type == d["type"].GetString()) return d;
-    }
-    return std::nullopt;
-  }
-  rapidjson::Document ReadType(const std::string& type) {
-    if (auto d = TryReadType(type, 1000)) return std::move(*d);
-    ADD_FAILURE() << "no '" << type << "' message in 1000";
-    return {};
-  }
-  void Send(const std::string& text) {
-    ws.text(true);
-    ws.write(asio::buffer(text));
-  }
-};
 
 struct ViewerServerTest : ::testing::Test {
   std::ostringstream log_text;

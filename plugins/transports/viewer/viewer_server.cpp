@@ -339,7 +339,7 @@ ViewerServer::ViewerServer(const Options& options, Callbacks callbacks,
   if (!ec) a.listen(asio::socket_base::max_listen_connections, ec);
   if (ec) {
     throw std::runtime_error("viewer: cannot listen on " + where + ": " + ec.message() +
-                             " (set another port in the world file's viewer block, or run with --no-viewer)");
+                             (options.busy_hint.empty() ? std::string() : " (" + options.busy_hint + ")"));
   }
   impl_->port = a.local_endpoint().port();
 }

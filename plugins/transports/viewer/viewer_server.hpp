@@ -31,6 +31,8 @@ class ViewerServer {
     std::uint16_t port = 8080;          ///< 0: the system picks a free port
     int max_clients = 16;               ///< WebSocket clients at once
     std::size_t max_message = 64 * 1024;  ///< longest message a page may send, bytes
+    /// What the error of a port that cannot be had suggests, in parentheses.
+    std::string busy_hint = "set another port in the world file's viewer block, or run with --no-viewer";
   };
   /// What the server asks its owner; all called on the server's thread.
   struct Callbacks {
