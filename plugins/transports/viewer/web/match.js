@@ -102,8 +102,11 @@
     if (!source) return;
     const age = status && Number.isFinite(status.referee_age) ? status.referee_age : null;
     let hint = '';
-    if (!ref) hint = `no referee · listening on ${source}`;
-    else if (age !== null && age > SILENT_AFTER && !(status && status.paused)) hint = `referee silent for ${Math.round(age)} s`;
+    const replay = !!(hello && hello.replay);  // a log: its times, not the wall clock's
+    if (!ref) hint = replay ? 'no referee message yet at this time of the log' : `no referee · listening on ${source}`;
+    else if (age !== null && age > SILENT_AFTER && (replay || !(status && status.paused))) {
+      hint = replay ? `no referee message for ${Math.round(age)} s in the log` : `referee silent for ${Math.round(age)} s`;
+    }
     setText($('sb-hint'), hint);
     const match = $('sb-match');
     if (match.hidden !== !ref) match.hidden = !ref;

@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // viewer.js: the WebSocket link to the ÜberSim server, drawing of the latest state, toolbar,
 // status bar, keyboard and pointer gestures. Geometry and the field layer live in field.js, the
-// match (scoreboard, placement target) in match.js.
+// match (scoreboard, placement target) in match.js, a replayed log's time slider in replay.js.
 // Frames are drawn on requestAnimationFrame only when a new state arrived or the user acted.
 'use strict';
 (function () {
   const F = window.UberSimField;
   const M = window.UberSimMatch;
+  const R = window.UberSimReplay;
   const $ = (id) => document.getElementById(id);
   const canvas = $('field');
   const ctx = canvas.getContext('2d');
@@ -110,12 +111,13 @@
     trails.clear();
     lastSig = '';
     $('world').textContent = m.world ? String(m.world) : '';
+    R.hello(m);
     M.update(m, api.referee, api.state && api.state.status);
     requestRender();
   }
 
   function onReferee(m) {
-    api.referee = m;
+    api.referee = m.cleared ? null : m;  // a replay gone back to before the first Referee message
     M.update(api.hello, m, api.state && api.state.status);
     requestRender();  // the placement target
   }
@@ -125,6 +127,7 @@
     api.state = s;
     recordTrails(s);
     updateStatus(s);
+    R.state(s);
     updatePanel(s);
     M.update(api.hello, api.referee, s.status);  // the hint: how long the referee has been silent
     // A paused simulation keeps sending the same state: redraw only when something moved.
@@ -198,7 +201,21 @@
     requestRender();
   }
 
+  // A replay knows only where the cameras saw the robot, and which did.
+  function replayRows(r) {
+    const seen = [];
+    for (const f of api.state && Array.isArray(api.state.vision) ? api.state.vision : []) {
+      if (f && Array.isArray(f.robots) && f.robots.some((d) => d && robotKey(d) === robotKey(r))) seen.push(f.camera);
+    }
+    return [
+      ['position', `${fmt(r.x, 3)}, ${fmt(r.y, 3)} m`],
+      ['heading', `${deg(r.yaw)}°`],
+      ['seen by', seen.length ? `camera ${seen.join(', ')}` : '–'],
+    ];
+  }
+
   function panelRows(r) {
+    if (R.active()) return replayRows(r);
     const rows = [
       ['position', `${fmt(r.x, 3)}, ${fmt(r.y, 3)} m`],
       ['heading', `${deg(r.yaw)}°`],
@@ -278,6 +295,18 @@
     if (el && (el.tagName === 'SELECT' || el.tagName === 'TEXTAREA'
       || (el.tagName === 'INPUT' && el.type !== 'checkbox'))) return;
     const k = e.key.length === 1 ? e.key.toLowerCase() : e.key;
+    if (R.active()) {  // a replay: play/pause and skip; nothing changes a world
+      if (k === ' ') {
+        if (isToggle(el)) el.blur();
+        if (!e.repeat) R.togglePlay();
+      } else if (k === 'ArrowLeft' || k === 'ArrowRight') {
+        R.skip(k === 'ArrowLeft' ? -5 : 5);
+      } else {
+        return;
+      }
+      e.preventDefault();
+      return;
+    }
     if (drag && drag.kind === 'robot' && (k === 'q' || k === 'e')) {
       rotateDrag(k === 'q' ? ROTATE_STEP : -ROTATE_STEP);
     } else if (k === ' ') {
@@ -744,6 +773,10 @@
       if (e.button === 0 && selected) select(null);
       return;
     }
+    if (R.active()) {  // a log cannot be changed: a click on a robot shows its panel, nothing drags
+      if (e.button === 0 && hit.kind === 'robot') select(selected === hit.key ? null : hit.key);
+      return;
+    }
     const kick = hit.kind === 'ball' && (e.button === 2 || e.shiftKey || $('kick-mode').checked);
     if (!kick && e.button === 2) return;
     const p = pointerField(e);
@@ -765,7 +798,7 @@
   canvas.addEventListener('pointermove', (e) => {
     if (!drag) {
       if (e.pointerType === 'mouse') {
-        const hit = hitTest(e.clientX, e.clientY, 'mouse');
+        const hit = R.active() ? null : hitTest(e.clientX, e.clientY, 'mouse');
         canvas.className = !hit ? '' : hit.kind === 'ball' && (e.shiftKey || $('kick-mode').checked) ? 'kick' : 'grab';
       }
       return;
