@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ubersim replay FILE`: plays an SSL log file (apps/sslog, docs/log-files.md) back onto the
 // league's multicast groups, one datagram per record, paced by the records' timestamps, as the
-// league's ssl-log-player does; or, with --info, says what the file holds.
+// league's ssl-log-player does; with --viewer, shows it in the browser viewer with a time slider
+// (replay_viewer.hpp), sending it too with --send; or, with --info, says what the file holds.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -18,8 +20,11 @@
 #include "command_line.hpp"
 #include "commands.hpp"
 #include "exit_codes.hpp"
+#include "replay_timeline.hpp"
+#include "replay_viewer.hpp"
 #include "ssl_log.hpp"
 #include "transport_common/multicast_sender.hpp"
+#include "ubersim/kernel/logging.hpp"
 
 namespace ubersim::cli {
 
@@ -157,6 +162,23 @@ void SleepUntil(SteadyClock::time_point due) {
   }
 }
 
+// Sends `record` if its type has a destination; true if it had one (sent or refused).
+bool SendTo(std::vector<Destination>& destinations, const LogRecord& record) {
+  for (Destination& d : destinations) {
+    if (d.type != record.type) continue;
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(record.payload.data());
+    if (d.sender->Send({bytes, record.payload.size()})) {
+      ++d.sent;
+    } else if (!d.warned) {
+      std::cerr << "ubersim replay: cannot send " << d.what << " to " << d.group << ":" << d.port << ": "
+                << d.sender->LastError() << " (reported once)\n";
+      d.warned = true;
+    }
+    return true;
+  }
+  return false;
+}
+
 // One pass over `file`: sends what has a destination, paced by `speed` (0: no pacing). Returns
 // how many datagrams it tried to send (sent or refused); counts what it skipped by type.
 std::uint64_t PlayOnce(const std::string& file, double speed, std::vector<Destination>& destinations,
@@ -168,11 +190,9 @@ std::uint64_t PlayOnce(const std::string& file, double speed, std::vector<Destin
   while (!g_stop) {
     const std::optional<LogRecord> record = reader.Next();
     if (!record) break;
-    Destination* d = nullptr;
-    for (Destination& candidate : destinations) {
-      if (candidate.type == record->type) d = &candidate;
-    }
-    if (!d) {
+    const bool has_destination = std::any_of(destinations.begin(), destinations.end(),
+                                             [&](const Destination& d) { return d.type == record->type; });
+    if (!has_destination) {
       ++skipped[record->type];
       continue;
     }
@@ -187,17 +207,74 @@ std::uint64_t PlayOnce(const std::string& file, double speed, std::vector<Destin
       SleepUntil(start + std::chrono::duration_cast<SteadyClock::duration>(std::chrono::duration<double>(after_s)));
       if (g_stop) break;
     }
-    const auto* bytes = reinterpret_cast<const std::uint8_t*>(record->payload.data());
-    if (d->sender->Send({bytes, record->payload.size()})) {
-      ++d->sent;
-    } else if (!d->warned) {
-      std::cerr << "ubersim replay: cannot send " << d->what << " to " << d->group << ":" << d->port << ": "
-                << d->sender->LastError() << " (reported once)\n";
-      d->warned = true;
-    }
+    SendTo(destinations, *record);
     ++tried;
   }
   return tried;
+}
+
+// "12.3 MB".
+std::string Megabytes(std::size_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f MB", static_cast<double>(bytes) / 1e6);
+  return text;
+}
+
+// True for an address that only this machine reaches (127.0.0.0/8, ::1).
+bool IsLoopback(const std::string& address) { return address.rfind("127.", 0) == 0 || address == "::1"; }
+
+// --viewer: loads the log, serves the page until Ctrl-C, sends it too when `destinations` is set.
+int ShowInViewer(const std::string& file, const ReplayViewerOptions& options, std::vector<Destination>* destinations) {
+  const auto loading = SteadyClock::now();
+  const std::unique_ptr<LogTimeline> timeline = LogTimeline::Load(file);
+  const LogTimeline::Counts& n = timeline->Count();
+  std::cout << "loaded " << file << ": " << n.records << " records, "
+            << Seconds(static_cast<double>(timeline->DurationNs()) / 1e9) << " (" << n.vision_frames
+            << " camera frames, " << n.detections << " detections, " << n.referee_messages << " referee messages"
+            << (n.tracked_frames > 0 ? ", " + std::to_string(n.tracked_frames) + " tracked frames (not shown)" : "")
+            << ") in " << Seconds(std::chrono::duration<double>(SteadyClock::now() - loading).count()) << "; holds "
+            << Megabytes(timeline->MemoryBytes()) << "\n";
+  if (timeline->Damage()) {
+    // The same located error as a replay onto the network gives; what came before it is shown.
+    std::cout.flush();
+    std::cerr << "ubersim replay: " << timeline->Damage()->what() << "\n";
+    std::cout << "(the file is damaged after these records: showing what came before)\n";
+  }
+  if (n.geometries == 0) std::cout << "no geometry in the log: the field drawn is Division B's\n";
+  if (timeline->Empty()) {
+    std::cout << "nothing to replay: no record of types 2, 3, 4 or 5\n";
+    return timeline->Damage() ? kExitRuntime : kExitOk;
+  }
+  std::cout.flush();
+
+  const StopOnSignal stop_on_signal;
+  kernel::StreamLog log(std::cerr, LogLevel::kWarning);
+  const auto started = SteadyClock::now();
+  SendRecord send;
+  if (destinations) send = [destinations](const LogRecord& r) { SendTo(*destinations, r); };
+  RunReplayViewer(
+      *timeline, options, send, [] { return g_stop != 0; },
+      [&](const std::string& url) {
+        std::cout << "viewer: " << url << " (open it in a browser; Ctrl-C stops)" << std::endl;
+      },
+      log);
+  if (destinations) {
+    std::uint64_t sent = 0, failed = 0;
+    std::string parts;
+    for (const Destination& d : *destinations) {
+      sent += d.sent;
+      failed += d.sender->Failed();
+      if (d.sent > 0) parts += std::string(parts.empty() ? "" : ", ") + d.what + " " + std::to_string(d.sent);
+    }
+    std::cout << "sent " << sent << " datagrams" << (parts.empty() ? "" : " (" + parts + ")") << " in "
+              << Seconds(std::chrono::duration<double>(SteadyClock::now() - started).count()) << "\n";
+    if (failed > 0) {
+      std::cerr << "ubersim replay: " << failed << " datagrams were refused by the system\n";
+      return kExitRuntime;
+    }
+  }
+  std::cout.flush();
+  return timeline->Damage() ? kExitRuntime : kExitOk;
 }
 
 }  // namespace
@@ -211,10 +288,16 @@ int ReplayCommand(const std::vector<std::string>& args) {
       "224.5.23.2:10010, referee (3) to 224.5.23.1:10003, legacy vision (2) to 224.5.23.2:10005;\n"
       "other types (the index among them) are skipped. --info says what the file holds instead.\n"
       "A file that cannot be read, or is damaged, ends the replay with exit code 1 and a message\n"
-      "naming the record and its byte offset; the records before it have been sent.\n\noptions");
+      "naming the record and its byte offset; the records before it have been sent.\n\n"
+      "--viewer shows the log in the browser viewer instead, with a time slider (play, pause,\n"
+      "speed, seek): the field from its geometry, robots and ball from the cameras' detections,\n"
+      "the match from its referee messages. It sends nothing unless --send is given too; then the\n"
+      "datagrams follow the slider. It serves the page until Ctrl-C.\n\noptions");
   std::string file;
   double speed = 1.0;
-  bool local_only = false, loop = false, info = false;
+  bool local_only = false, loop = false, info = false, viewer = false, send = false;
+  std::string viewer_address = "127.0.0.1";
+  std::uint16_t viewer_port = 8080;
   std::vector<std::string> interfaces;
   std::uint16_t vision_port = 10006, tracker_port = 10010, referee_port = 10003, legacy_port = 10005;
   desc.add_options()("help,h", "this help")
@@ -234,7 +317,15 @@ int ReplayCommand(const std::vector<std::string>& args) {
       ("referee-port", po::value<std::uint16_t>(&referee_port)->value_name("PORT")->default_value(10003),
        "port of the referee (type 3)")
       ("vision-legacy-port", po::value<std::uint16_t>(&legacy_port)->value_name("PORT")->default_value(10005),
-       "port of legacy vision (type 2)");
+       "port of legacy vision (type 2)")
+      ("viewer", po::bool_switch(&viewer),
+       "show the log in the browser viewer with a time slider (sends nothing without --send)")
+      ("send", po::bool_switch(&send), "with --viewer: send the log too, in step with the slider")
+      ("viewer-port", po::value<std::uint16_t>(&viewer_port)->value_name("PORT")->default_value(8080),
+       "with --viewer: the page's port (0: any free one)")
+      ("viewer-address", po::value<std::string>(&viewer_address)->value_name("ADDR")->default_value("127.0.0.1"),
+       "with --viewer: the numeric address the page is served on (0.0.0.0: every interface; loopback "
+       "only with --local-only)");
   po::options_description hidden;
   hidden.add_options()("file", po::value<std::string>(&file));
   po::positional_options_description pos;
@@ -248,9 +339,27 @@ int ReplayCommand(const std::vector<std::string>& args) {
   if (!std::isfinite(speed) || speed < 0) {
     throw UsageError("--speed " + Number(speed) + ": must be 0 (as fast as possible) or more");
   }
+  if (!viewer) {
+    for (const char* flag : {"send", "viewer-port", "viewer-address"}) {
+      if (!vm[flag].defaulted()) {
+        throw UsageError(std::string("--") + flag + " is for --viewer (without it, replay sends the log anyway)");
+      }
+    }
+  }
+  if (viewer && (speed < 0.25 || speed > 8)) {
+    throw UsageError("--speed " + Number(speed) + ": the viewer plays 0.25 to 8 times the recorded rate");
+  }
+  if (viewer && local_only && !IsLoopback(viewer_address)) {
+    throw UsageError("--viewer-address " + viewer_address + " with --local-only: the page would be reachable "
+                     "from other machines; leave it out (127.0.0.1) or drop --local-only");
+  }
   if (info) return Info(file);
 
   { const LogReader check(file); }  // a missing or foreign file is named before any socket is opened
+  if (viewer && !send) {
+    std::cout << "showing " << file << " in the viewer; nothing is sent (add --send to send it too)\n";
+    return ShowInViewer(file, ReplayViewerOptions{file, viewer_address, viewer_port, 60, speed, loop}, nullptr);
+  }
   std::vector<Destination> destinations;
   destinations.push_back({4, "vision", "224.5.23.2", vision_port, nullptr});
   destinations.push_back({5, "tracked vision", "224.5.23.2", tracker_port, nullptr});
@@ -265,6 +374,10 @@ int ReplayCommand(const std::vector<std::string>& args) {
     o.name = std::string("replay ") + d.what;
     d.sender = std::make_unique<transport::MulticastSender>(o);
     std::cout << d.what << " (type " << d.type << "): " << d.sender->Describe() << "\n";
+  }
+  if (viewer) {
+    std::cout << "replaying " << file << " in the viewer and on the network, in step with the slider\n";
+    return ShowInViewer(file, ReplayViewerOptions{file, viewer_address, viewer_port, 60, speed, loop}, &destinations);
   }
   std::cout << "replaying " << file << " at " << (speed > 0 ? "speed " + Number(speed) : std::string("full speed"))
             << (loop ? ", looping (Ctrl-C stops)" : "") << std::endl;
