@@ -9,7 +9,8 @@ makes t_capture the simulated time of the frame). The ball is dragged with real 
 and a screenshot is saved (to $UBERSIM_TEST_OUTPUT_DIR, or a temporary folder; the path is
 printed). The match: a Referee message sent as the game controller sends it (multicast on
 loopback, to the viewer's referee_port) shows in the scoreboard, with the placement target on
-the field.
+the field. A replay: `ubersim replay LOG --viewer` on a log `ubersim run --record` wrote shows its
+time slider, which seeks, and its controls, which reach the replay.
 
 Without Chromium, chromedriver or Selenium the test is skipped, saying what is missing
 (`./setup.sh` installs them).
@@ -19,8 +20,10 @@ import math
 import os
 import re
 import shutil
+import signal
 import socket
 import struct
+import subprocess
 import tempfile
 import threading
 import time
@@ -182,6 +185,31 @@ def browser_missing():
     return "the viewer's browser test needs " + " and ".join(missing) + "; ./setup.sh installs them"
 
 
+def start_chromium(workdir, driver_log):
+    """Headless Chromium through its chromedriver, its profile in `workdir`."""
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                "--no-first-run", "--disable-background-networking", "--disable-component-update",
+                "--disable-sync", "--window-size=1280,900",
+                "--user-data-dir=" + os.path.join(workdir, "profile")):
+        options.add_argument(arg)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    service = Service(executable_path=CHROMEDRIVER, log_path=driver_log)
+
+    # Selenium Manager (which downloads drivers) is only tried when the driver cannot be
+    # started from its path; with an explicit chromedriver it must never run: make it fail.
+    class NoSeleniumManager:
+        def __init__(self, *args, **kwargs):
+            raise AssertionError("Selenium tried to run Selenium Manager (a download)")
+
+    with mock.patch.object(selenium_service, "SeleniumManager", NoSeleniumManager):
+        driver = webdriver.Chrome(service=service, options=options)
+    driver.set_page_load_timeout(30)
+    driver.set_script_timeout(10)
+    return driver
+
+
 def output_directory():
     path = os.environ.get("UBERSIM_TEST_OUTPUT_DIR")
     if path:
@@ -239,28 +267,8 @@ class ViewerInBrowser(unittest.TestCase):
 
     @classmethod
     def start_browser(cls):
-        options = webdriver.ChromeOptions()
-        options.binary_location = CHROMIUM
-        for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                    "--no-first-run", "--disable-background-networking", "--disable-component-update",
-                    "--disable-sync", "--window-size=1280,900",
-                    "--user-data-dir=" + os.path.join(cls.workdir, "profile")):
-            options.add_argument(arg)
-        options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
         cls.driver_log = os.path.join(cls.workdir, "chromedriver.log")
-        service = Service(executable_path=CHROMEDRIVER, log_path=cls.driver_log)
-
-        # Selenium Manager (which downloads drivers) is only tried when the driver cannot be
-        # started from its path; with an explicit chromedriver it must never run: make it fail.
-        class NoSeleniumManager:
-            def __init__(self, *args, **kwargs):
-                raise AssertionError("Selenium tried to run Selenium Manager (a download)")
-
-        with mock.patch.object(selenium_service, "SeleniumManager", NoSeleniumManager):
-            driver = webdriver.Chrome(service=service, options=options)
-        driver.set_page_load_timeout(30)
-        driver.set_script_timeout(10)
-        return driver
+        return start_chromium(cls.workdir, cls.driver_log)
 
     @classmethod
     def quit_browser(cls):
@@ -786,6 +794,120 @@ class ViewerInBrowser(unittest.TestCase):
             self.assertGreaterEqual(self.vision.geometry_packets, 1, "the geometry sent at start")
             self.sim.assert_running()
             print(f"\nruntime so far {time.monotonic() - self.started:.1f} s")
+
+
+class ReplayInBrowser(unittest.TestCase):
+    """`ubersim replay LOG --viewer` in the browser: a log that `ubersim run --referee builtin
+    --record` wrote (Division B, 8 s), shown with the time slider. The page shows the replay bar
+    and hides the world's controls; clicking on the slider seeks there, the button pauses, the
+    speed select and the space key reach the replay."""
+
+    REPLAY_JS = """
+const v = window.ubersimViewer;
+const s = v && v.state;
+return {connected: !!(v && v.connected), replay: s && s.status ? s.status.replay || null : null, t: s ? s.t : null,
+        robots: v && v.drawn ? v.drawn.robots.length : 0, slider: Number(document.getElementById('replay-slider').value),
+        time: document.getElementById('replay-time').textContent, total: document.getElementById('replay-total').textContent,
+        play: document.getElementById('replay-play').textContent, command: document.getElementById('sb-command').textContent};
+"""
+
+    @classmethod
+    def setUpClass(cls):
+        reason = browser_missing()
+        if reason:
+            raise unittest.SkipTest(reason)
+        cls.workdir = tempfile.mkdtemp(prefix="ubersim_viewer_replay_")
+        cls.addClassCleanup(shutil.rmtree, cls.workdir, ignore_errors=True)
+        cls.log = os.path.join(cls.workdir, "match.log.gz")
+        vision_port, referee_port, tracker_port = harness.free_udp_ports(3)
+        run = subprocess.run([harness.BINARY, "run", "div-b", "--local-only", "--no-viewer", "--no-transport",
+                              "ssl_simulation", "--no-transport", "grsim", "--fast", "--duration", "8", "-q",
+                              "--referee", "builtin", "--vision-port", str(vision_port), "--referee-port",
+                              str(referee_port), "--tracker-port", str(tracker_port), "--record", cls.log],
+                             capture_output=True, text=True, timeout=120)
+        assert run.returncode == 0, run.stdout + run.stderr
+        cls.output_path = os.path.join(cls.workdir, "replay.txt")
+        cls.output_file = open(cls.output_path, "wb")
+        cls.addClassCleanup(cls.output_file.close)
+        cls.process = subprocess.Popen([harness.BINARY, "replay", cls.log, "--viewer", "--viewer-port", "0",
+                                        "--local-only"], stdout=cls.output_file, stderr=subprocess.STDOUT,
+                                       stdin=subprocess.DEVNULL)
+        cls.addClassCleanup(cls.stop_replay)
+        match = harness.wait_for(lambda: re.search(r"viewer: (http://127\.0\.0\.1:\d+/)", cls.output()), 30.0,
+                                 interval=0.05, what="the replay's viewer address")
+        cls.driver_log = os.path.join(cls.workdir, "chromedriver.log")
+        cls.driver = start_chromium(cls.workdir, cls.driver_log)
+        cls.addClassCleanup(cls.driver.quit)
+        cls.driver.get(match.group(1))
+        harness.wait_for(lambda: (lambda r: r["connected"] and r["replay"] and r["robots"] >= 10)(cls.page()), 30.0,
+                         interval=0.05, what="the replay on the page, drawing robots")
+
+    @classmethod
+    def output(cls):
+        with open(cls.output_path, encoding="utf-8", errors="replace") as f:
+            return f.read()
+
+    @classmethod
+    def stop_replay(cls):
+        if cls.process.poll() is None:
+            cls.process.send_signal(signal.SIGINT)
+            try:
+                cls.process.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                cls.process.kill()
+                cls.process.wait(timeout=5)
+
+    @classmethod
+    def page(cls):
+        return cls.driver.execute_script(cls.REPLAY_JS)
+
+    def test_the_slider_seeks_and_the_controls_reach_the_replay(self):
+        try:
+            displayed = lambda element_id: self.driver.find_element(By.ID, element_id).is_displayed()  # noqa: E731
+            self.assertTrue(displayed("replay-bar"))
+            for live_only in ("pause", "step", "reset", "chip", "kick-mode"):
+                self.assertFalse(displayed(live_only), f"#{live_only} is shown in a replay")
+            self.assertTrue(displayed("scoreboard"))
+            p = self.page()
+            duration = p["replay"]["duration"]
+            self.assertAlmostEqual(duration, 8.0, delta=0.1)
+            self.assertEqual(p["total"], "0:08.0")
+
+            # The button pauses; the page says so.
+            self.driver.find_element(By.ID, "replay-play").click()
+            p = harness.wait_for(lambda: (lambda r: r if not r["replay"]["playing"] else None)(self.page()), 5.0,
+                                 what="the replay paused")
+            self.assertEqual(p["play"], "Play")
+
+            # A click on the slider at three quarters of its width seeks there.
+            slider = self.driver.find_element(By.ID, "replay-slider")
+            rect = self.driver.execute_script("return arguments[0].getBoundingClientRect().toJSON();", slider)
+            actions = ActionBuilder(self.driver)
+            actions.pointer_action.move_to_location(int(rect["left"] + 0.75 * rect["width"]),
+                                                    int(rect["top"] + rect["height"] / 2))
+            actions.pointer_action.click()
+            actions.perform()
+            p = harness.wait_for(lambda: (lambda r: r if abs(r["replay"]["t"] - r["slider"]) < 1e-3
+                                          and r["slider"] > 0.6 * duration else None)(self.page()),
+                                 5.0, what="the replay at the slider's time")
+            self.assertLess(p["slider"], 0.9 * duration)
+            self.assertFalse(p["replay"]["playing"], "a seek keeps it paused")
+            self.assertAlmostEqual(p["t"], p["replay"]["t"], delta=1e-3)
+            self.assertNotEqual(p["command"], "", "the scoreboard shows the log's match")
+
+            # The speed select and the space key.
+            self.driver.execute_script("""const s = document.getElementById('replay-speed');
+                s.value = '4'; s.dispatchEvent(new Event('change'));""")
+            harness.wait_for(lambda: self.page()["replay"]["speed"] == 4, 5.0, what="speed 4 on the replay")
+            self.driver.find_element(By.TAG_NAME, "body").send_keys(" ")
+            harness.wait_for(lambda: self.page()["replay"]["playing"], 5.0, what="playing after the space key")
+            path = os.path.join(output_directory(), "viewer-replay.png")
+            self.assertTrue(self.driver.save_screenshot(path))
+            print(f"\nreplay page: {self.page()}; screenshot {path}")
+            severe = [e for e in self.driver.get_log("browser") if e.get("level") == "SEVERE"]
+            self.assertEqual(severe, [])
+        except AssertionError as e:
+            raise AssertionError(f"{e}\n--- ubersim replay ---\n{self.output()}") from e
 
 
 if __name__ == "__main__":
