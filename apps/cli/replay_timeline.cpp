@@ -312,7 +312,8 @@ void LogTimeline::SampleAt(std::int64_t t_ns, viewer::WorldSample& sample, std::
         std::any_of(used.begin(), used.end(), [&](std::size_t i) { return frames_[i].Camera() == it->Camera(); });
     if (!seen) used.push_back(static_cast<std::size_t>(it - frames_.begin()));
   }
-  std::sort(used.begin(), used.end(), [&](std::size_t a, std::size_t b) { return frames_[a].Camera() < frames_[b].Camera(); });
+  std::sort(used.begin(), used.end(),
+            [&](std::size_t a, std::size_t b) { return frames_[a].Camera() < frames_[b].Camera(); });
 
   struct Sum {
     double w = 0, x = 0, y = 0, c = 0, s = 0, wyaw = 0;
@@ -409,12 +410,17 @@ std::int64_t LogTimeline::FramesBetween(std::int64_t from_ns, std::int64_t to_ns
   return b > a ? b - a : 0;
 }
 
+std::size_t LogTimeline::RefereeIndexAt(std::int64_t t_ns) const {
+  const auto it = std::upper_bound(referee_.begin(), referee_.end(), t_ns,
+                                   [](std::int64_t t, const RefereeState& r) { return t < r.t_ns; });
+  return static_cast<std::size_t>(it - referee_.begin());
+}
+
 std::string LogTimeline::RefereeAt(std::int64_t t_ns, std::size_t* index) const {
-  auto it = std::upper_bound(referee_.begin(), referee_.end(), t_ns,
-                             [](std::int64_t t, const RefereeState& r) { return t < r.t_ns; });
-  if (index) *index = static_cast<std::size_t>(it - referee_.begin());
-  if (it == referee_.begin()) return {};
-  --it;
+  const std::size_t i = RefereeIndexAt(t_ns);
+  if (index) *index = i;
+  if (i == 0) return {};
+  const auto it = referee_.begin() + static_cast<std::ptrdiff_t>(i - 1);
   ::Referee message;
   GameEvent earlier;
   message.ParseFromString(it->payload);  // parsed once already, when the log was loaded

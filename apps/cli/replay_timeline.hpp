@@ -94,6 +94,8 @@ class LogTimeline {
   /// The referee message shown at t, as the viewer's JSON (viewer_referee.hpp); "" before the
   /// first. `index` (0 before the first, then 1, 2, …) tells whether it changed since an earlier call.
   std::string RefereeAt(std::int64_t t_ns, std::size_t* index = nullptr) const;
+  /// RefereeAt's index alone (cheap: no JSON).
+  std::size_t RefereeIndexAt(std::int64_t t_ns) const;
   /// ns since the last Referee message at or before t; nullopt before the first.
   std::optional<std::int64_t> RefereeAgeAt(std::int64_t t_ns) const;
   /// The last checkpoint at or before t (the first for t before it). Only when !Empty().

@@ -237,11 +237,8 @@ class ReplayPage {
       hello_ = EncodeHello(g);
       Broadcast(hello_, viewer::ViewerServer::Channel::kHello);
     }
-    std::size_t referee = 0;
-    std::string json = timeline_.RefereeAt(p.t_ns, &referee);
-    if (referee != referee_index_) {
-      referee_index_ = referee;
-      referee_ = std::move(json);
+    if (timeline_.RefereeIndexAt(p.t_ns) != referee_index_) {
+      referee_ = timeline_.RefereeAt(p.t_ns, &referee_index_);
       Broadcast(referee_.empty() ? std::string(kNoReferee) : referee_, viewer::ViewerServer::Channel::kReferee);
     }
     timeline_.SampleAt(p.t_ns, sample_, frames_);
@@ -288,7 +285,8 @@ void RunReplayViewer(const LogTimeline& timeline, const ReplayViewerOptions& opt
   o.address = options.address;
   o.port = options.port;
   o.busy_hint = "choose another with --viewer-port";
-  const auto period = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(1.0 / options.rate));
+  const auto period =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(1.0 / options.rate));
   viewer::ViewerServer server(o, page.Callbacks(), period, log);
   page.SetServer(&server);
   // The clock starts when the page can be seen.

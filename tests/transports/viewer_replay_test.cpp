@@ -392,7 +392,9 @@ TEST(ReplayTimeline, TimeNeverGoesBackAndCheckpointsComeBeforeTheirTime) {
 
 TEST(ReplayTimeline, ADamagedFileKeepsWhatCameBeforeAndSaysWhere) {
   std::vector<LogRecord> records;
-  for (int i = 0; i < 10; ++i) records.push_back({kT0 + i * 100 * kMs, 4, VisionFrame(0, i, {{"blue", 0, i * 10.0, 0, 0.0}})});
+  for (int i = 0; i < 10; ++i) {
+    records.push_back({kT0 + i * 100 * kMs, 4, VisionFrame(0, i, {{"blue", 0, i * 10.0, 0, 0.0}})});
+  }
   const fs::path whole = WriteLog("whole.log", records);
   const std::string bytes = ReadBytes(whole);
   const fs::path cut = TempDir() / "cut.log";
@@ -531,7 +533,8 @@ struct ReadLog {
     std::map<std::string, std::tuple<double, double, double>> sums;  // w, wx, wy
     for (const auto& [camera, d] : latest) {
       std::map<std::string, const SSL_DetectionRobot*> best;
-      for (const auto& [team, robots] : {std::pair{"blue", &d->robots_blue()}, std::pair{"yellow", &d->robots_yellow()}}) {
+      for (const auto& [team, robots] :
+           {std::pair{"blue", &d->robots_blue()}, std::pair{"yellow", &d->robots_yellow()}}) {
         for (const SSL_DetectionRobot& r : *robots) {
           const std::string key = std::string(team) + " " + std::to_string(r.robot_id());
           if (!best[key] || r.confidence() > best[key]->confidence()) best[key] = &r;
