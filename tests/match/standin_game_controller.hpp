@@ -16,6 +16,7 @@
 
 #include <boost/asio.hpp>
 
+#include "../common/referee_messages.hpp"
 #include "ssl_gc_ci.pb.h"
 #include "transport_common/delimited.hpp"
 
@@ -24,22 +25,9 @@ namespace ubersim::testing {
 class StandinGameController {
  public:
   StandinGameController() : acceptor_(io_, {boost::asio::ip::make_address("127.0.0.1"), 0}) {
-    referee_.set_packet_timestamp(0);
-    referee_.set_stage(Referee::NORMAL_FIRST_HALF_PRE);
+    referee_ = HaltedReferee(0);
     referee_.set_stage_time_left(300'000'000);
-    referee_.set_command(Referee::HALT);
-    referee_.set_command_counter(0);
-    referee_.set_command_timestamp(0);
-    for (Referee::TeamInfo* t : {referee_.mutable_yellow(), referee_.mutable_blue()}) {
-      t->set_name(t == referee_.mutable_yellow() ? "Yellow" : "Blue");
-      t->set_score(0);
-      t->set_red_cards(0);
-      t->set_yellow_cards(0);
-      t->set_timeouts(4);
-      t->set_timeout_time(300'000'000);
-      t->set_goalkeeper(0);
-      t->set_max_allowed_bots(6);
-    }
+    for (Referee::TeamInfo* t : {referee_.mutable_yellow(), referee_.mutable_blue()}) t->set_max_allowed_bots(6);
     referee_.set_next_command(Referee::PREPARE_KICKOFF_YELLOW);
     thread_ = std::thread([this] { Serve(); });
   }

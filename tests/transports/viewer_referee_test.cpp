@@ -12,6 +12,7 @@
 #include <rapidjson/document.h>
 #include <rapidjson/error/en.h>
 
+#include "../common/referee_messages.hpp"
 #include "ssl_gc_game_event.pb.h"
 #include "ssl_gc_referee_message.pb.h"
 #include "viewer_referee.hpp"
@@ -33,21 +34,7 @@ rapidjson::Document Parse(const std::string& text) {
 
 // Only what the message requires: a halted match before the first kick-off.
 Referee Minimal() {
-  Referee r;
-  r.set_packet_timestamp(1'700'000'000'000'000);
-  r.set_stage(Referee::NORMAL_FIRST_HALF_PRE);
-  r.set_command(Referee::HALT);
-  r.set_command_counter(0);
-  r.set_command_timestamp(1'700'000'000'000'000);
-  for (Referee::TeamInfo* t : {r.mutable_yellow(), r.mutable_blue()}) {
-    t->set_name(t == r.mutable_yellow() ? "Yellow" : "Blue");
-    t->set_score(0);
-    t->set_red_cards(0);
-    t->set_yellow_cards(0);
-    t->set_timeouts(4);
-    t->set_timeout_time(300'000'000);
-    t->set_goalkeeper(0);
-  }
+  Referee r = ubersim::testing::HaltedReferee(1'700'000'000'000'000);
   return r;
 }
 

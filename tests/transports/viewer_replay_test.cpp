@@ -29,7 +29,9 @@
 #include <gtest/gtest.h>
 
 #include "../common/multicast_receiver.hpp"
+#include "../common/referee_messages.hpp"
 #include "../common/run_ubersim.hpp"
+#include "../common/temp_dir.hpp"
 #include "replay_timeline.hpp"
 #include "ssl_gc_referee_message.pb.h"
 #include "ssl_log.hpp"
@@ -53,20 +55,9 @@ using namespace std::chrono_literals;
 constexpr std::int64_t kT0 = 1'700'000'000'000'000'000;  // Unix ns of the logs written here
 constexpr std::int64_t kMs = 1'000'000;
 
-fs::path TempDir() {
-  const fs::path dir = fs::temp_directory_path() / ("ubersim_viewer_replay_test_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir;
-}
-
-class RemoveTempDir : public ::testing::Environment {
- public:
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(TempDir(), ignored);
-  }
-};
-[[maybe_unused]] ::testing::Environment* const kRemoveTempDir = ::testing::AddGlobalTestEnvironment(new RemoveTempDir);
+fs::path TempDir() { return ubersim::testing::ProcessTempDir("ubersim_viewer_replay_test"); }
+[[maybe_unused]] ::testing::Environment* const kRemoveTempDir =
+    ::testing::AddGlobalTestEnvironment(new ubersim::testing::RemoveDirAtEnd(TempDir()));
 
 std::string ReadBytes(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -160,22 +151,11 @@ std::string GeometryPacket(int field_length_mm, int camera_x_mm) {
 }
 
 std::string RefereeMessage(std::uint32_t counter, std::int64_t stage_time_left_us, bool with_event = false) {
-  Referee r;
-  r.set_packet_timestamp(1);
+  Referee r = ubersim::testing::HaltedReferee(1, "Y", "B");
   r.set_stage(Referee::NORMAL_FIRST_HALF);
   r.set_stage_time_left(stage_time_left_us);
   r.set_command(Referee::STOP);
   r.set_command_counter(counter);
-  r.set_command_timestamp(1);
-  for (Referee::TeamInfo* t : {r.mutable_yellow(), r.mutable_blue()}) {
-    t->set_name(t == r.mutable_yellow() ? "Y" : "B");
-    t->set_score(0);
-    t->set_red_cards(0);
-    t->set_yellow_cards(0);
-    t->set_timeouts(4);
-    t->set_timeout_time(300'000'000);
-    t->set_goalkeeper(0);
-  }
   if (with_event) {
     GameEvent* e = r.add_game_events();
     e->set_type(GameEvent::BALL_LEFT_FIELD_TOUCH_LINE);

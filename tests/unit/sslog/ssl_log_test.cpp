@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "../../common/multicast_receiver.hpp"
+#include "../../common/temp_dir.hpp"
 #include "../../common/run_ubersim.hpp"
 
 namespace {
@@ -47,21 +48,10 @@ const std::string kPythonReader = UBERSIM_SOURCE_DIR "/tests/unit/sslog/read_ssl
 // interpreter first on PATH.
 const std::string kSystemPython = "/usr/bin/python3";
 
-fs::path TempDir() {
-  const fs::path dir = fs::temp_directory_path() / ("ubersim_sslog_test_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir;
-}
-
+fs::path TempDir() { return ubersim::testing::ProcessTempDir("ubersim_sslog_test"); }
 // Removes this process's TempDir when the tests end.
-class RemoveTempDir : public ::testing::Environment {
- public:
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(TempDir(), ignored);
-  }
-};
-[[maybe_unused]] ::testing::Environment* const kRemoveTempDir = ::testing::AddGlobalTestEnvironment(new RemoveTempDir);
+[[maybe_unused]] ::testing::Environment* const kRemoveTempDir =
+    ::testing::AddGlobalTestEnvironment(new ubersim::testing::RemoveDirAtEnd(TempDir()));
 
 std::string ReadBytes(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
