@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "world_loading.hpp"
+#include "shared/world_loading.hpp"
 
 #include "ubersim/kernel/data_paths.hpp"
 
-namespace ubersim::cli {
+namespace ubersim::apps {
 
 namespace fs = std::filesystem;
 using kernel::ModelLoader;
@@ -49,4 +49,4 @@ LoadedWorld LoadWorldWithPlugins(const fs::path& file, const std::vector<std::st
   return LoadedWorld{std::move(loading), std::move(model)};
 }
 
-}  // namespace ubersim::cli
+}  // namespace ubersim::apps
