@@ -19,7 +19,7 @@ PACKAGES=(
   libyaml-cpp-dev rapidjson-dev
   libprotobuf-dev protobuf-compiler
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3-protobuf python3-yaml
+  python3-protobuf python3-yaml python3-dev pybind11-dev python3-numpy python3-pytest
   iproute2
 )
 # The viewer's end-to-end test drives a real browser: Debian's Chromium through its chromedriver
