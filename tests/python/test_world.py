@@ -99,3 +99,12 @@ def test_errors_carry_the_command_lines_text_and_exit_code():
         ubersim.World("div-b").restore(b"not a snapshot")
     with pytest.raises(ValueError):
         ubersim.World("div-b").command("green", 0)
+
+
+def test_the_stubs_name_every_public_member_of_the_module():
+    # An editor completes from __init__.pyi: it must list what the module really has.
+    stub = open(os.path.join(os.path.dirname(ubersim.__file__), "__init__.pyi")).read()
+    for name in [n for n in dir(ubersim.World) if not n.startswith("_")]:
+        assert f"def {name}(" in stub, name
+    for name in ubersim.__all__:
+        assert f"class {name}" in stub, name
