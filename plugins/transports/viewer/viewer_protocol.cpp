@@ -418,26 +418,32 @@ std::string EncodeReply(std::string_view cmd, const std::optional<std::int64_t>&
   return buffer.GetString();
 }
 
+namespace {
+
+// A page's command: a JSON object with "cmd" (and "id", echoed back); its parse into `doc`, `id`
+// and `cmd`, or why it cannot be read.
+std::string ParseCommandEnvelope(std::string_view text, rapidjson::Document& doc, std::optional<std::int64_t>& id,
+                                 std::string& cmd) {
+  doc.Parse(text.data(), text.size());
+  if (doc.HasParseError()) {
+    return std::string("not JSON: ") + rapidjson::GetParseError_En(doc.GetParseError()) + " at offset " +
+           std::to_string(doc.GetErrorOffset());
+  }
+  if (!doc.IsObject()) return "a command must be a JSON object";
+  id = ReadId(doc);
+  auto member = doc.FindMember("cmd");  // not const: rapidjson's == is ambiguous in C++20 then
+  if (member == doc.MemberEnd() || !member->value.IsString()) return "'cmd' is missing or not a string";
+  cmd = member->value.GetString();
+  return "";
+}
+
+}  // namespace
+
 DecodedCommand DecodeCommand(std::string_view text, const CommandLimits& limits) {
   DecodedCommand out;
   rapidjson::Document doc;
-  doc.Parse(text.data(), text.size());
-  if (doc.HasParseError()) {
-    out.error = std::string("not JSON: ") + rapidjson::GetParseError_En(doc.GetParseError()) +
-                " at offset " + std::to_string(doc.GetErrorOffset());
-    return out;
-  }
-  if (!doc.IsObject()) {
-    out.error = "a command must be a JSON object";
-    return out;
-  }
-  out.id = ReadId(doc);
-  auto cmd = doc.FindMember("cmd");  // not const: rapidjson's == is ambiguous in C++20 then
-  if (cmd == doc.MemberEnd() || !cmd->value.IsString()) {
-    out.error = "'cmd' is missing or not a string";
-    return out;
-  }
-  out.cmd = cmd->value.GetString();
+  out.error = ParseCommandEnvelope(text, doc, out.id, out.cmd);
+  if (!out.error.empty()) return out;
   const std::string& name = out.cmd;
   if (name == "pause" || name == "resume" || name == "reset") {
     ClockEvent e;
@@ -492,23 +498,8 @@ DecodedCommand DecodeCommand(std::string_view text, const CommandLimits& limits)
 ReplayCommand DecodeReplayCommand(std::string_view text, const ReplayInfo& replay) {
   ReplayCommand out;
   rapidjson::Document doc;
-  doc.Parse(text.data(), text.size());
-  if (doc.HasParseError()) {
-    out.error = std::string("not JSON: ") + rapidjson::GetParseError_En(doc.GetParseError()) +
-                " at offset " + std::to_string(doc.GetErrorOffset());
-    return out;
-  }
-  if (!doc.IsObject()) {
-    out.error = "a command must be a JSON object";
-    return out;
-  }
-  out.id = ReadId(doc);
-  auto cmd = doc.FindMember("cmd");
-  if (cmd == doc.MemberEnd() || !cmd->value.IsString()) {
-    out.error = "'cmd' is missing or not a string";
-    return out;
-  }
-  out.cmd = cmd->value.GetString();
+  out.error = ParseCommandEnvelope(text, doc, out.id, out.cmd);
+  if (!out.error.empty()) return out;
   const std::string& name = out.cmd;
   if (name == "seek") {
     const auto t = ReadNumber(doc, "t", true, out.error);
