@@ -40,6 +40,31 @@ std::string CommandLineText(const std::string& command, const std::vector<std::s
   return text;
 }
 
+void AddPortFlags(po::options_description& desc) {
+  desc.add_options()
+      ("vision-port", po::value<int>(), "SSL-Vision multicast port (default 10020; 10006 as real ssl-vision)")
+      ("control-port", po::value<int>(), "simulation protocol: SimulatorCommand port (default 10300)")
+      ("blue-port", po::value<int>(), "simulation protocol: blue team's RobotControl port (default 10301)")
+      ("yellow-port", po::value<int>(), "simulation protocol: yellow team's RobotControl port (default 10302)")
+      ("grsim-port", po::value<int>(), "grSim protocol command port (default 20011)")
+      ("viewer-port", po::value<int>(), "browser viewer port (default 8080)");
+}
+
+void ReadPortFlags(const po::variables_map& vm, std::map<std::string, int>& ports) {
+  for (const char* port : {"vision", "control", "blue", "yellow", "grsim", "viewer"}) {
+    const std::string flag = std::string(port) + "-port";
+    if (vm.count(flag)) ports[port] = vm[flag].as<int>();
+  }
+}
+
+LogLevel LogLevelOf(const std::string& name) {
+  if (name == "debug") return LogLevel::kDebug;
+  if (name == "info") return LogLevel::kInfo;
+  if (name == "warning") return LogLevel::kWarning;
+  if (name == "error") return LogLevel::kError;
+  throw UsageError("unknown --log-level '" + name + "'");
+}
+
 void PhysicsFlags::AddTo(po::options_description& desc) {
   std::string names;
   for (const std::string& n : kernel::PhysicsProfileNames()) names += (names.empty() ? "" : ", ") + n;

@@ -3,6 +3,7 @@
 // --help and usage errors handled alike) and the physics flags several of them take.
 #pragma once
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 #include <boost/program_options.hpp>
 
 #include "ubersim/kernel/model.hpp"
+#include "ubersim/log.hpp"
 
 namespace ubersim::cli {
 
@@ -21,6 +23,15 @@ std::optional<int> ParseCommandLine(const std::vector<std::string>& args, const 
                                     boost::program_options::variables_map& vm,
                                     const boost::program_options::options_description* hidden = nullptr,
                                     const boost::program_options::positional_options_description* positional = nullptr);
+
+/// --vision-port, --control-port, --blue-port, --yellow-port, --grsim-port, --viewer-port: the
+/// transports' ports of the commands that start them (run, match).
+void AddPortFlags(boost::program_options::options_description& desc);
+/// The port flags given, by name without "-port" ("vision" → 10006), into `ports`.
+void ReadPortFlags(const boost::program_options::variables_map& vm, std::map<std::string, int>& ports);
+
+/// The --log-level: debug, info, warning or error; throws UsageError for another word.
+LogLevel LogLevelOf(const std::string& name);
 
 /// "ubersim COMMAND ARGS…": the command line as typed, for reports.
 std::string CommandLineText(const std::string& command, const std::vector<std::string>& args);

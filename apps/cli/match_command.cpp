@@ -94,6 +94,9 @@ std::string Expand(std::string command, const std::vector<std::pair<std::string,
   return command;
 }
 
+// Robot commands received from the match's team `i` (0 yellow, 1 blue; the kernel counts blue first).
+std::int64_t CommandsFrom(const World& world, int i) { return world.event_counters().commands_received[i == 0 ? 1 : 0]; }
+
 struct TeamWatch {
   std::unique_ptr<match::TeamProcess> process;
   std::string command;
@@ -147,7 +150,7 @@ void WriteResult(const fs::path& file, const MatchCommandFlags& f, const WorldMo
       w.Null();
     }
     w.Key("commands_received");
-    w.Int64(world.event_counters().commands_received[i == 0 ? 1 : 0]);
+    w.Int64(CommandsFrom(world, i));
     if (referee != nullptr) {
       const Referee::TeamInfo& t = i == 0 ? referee->message().yellow() : referee->message().blue();
       w.Key("name");
@@ -216,14 +219,9 @@ int MatchCommand(const std::vector<std::string>& args) {
       ("speed", po::value<double>(&f.speed)->default_value(1.0), "speed factor (sim s per wall s)")
       ("local-only", "keep everything on loopback (127.0.0.1)")
       ("no-viewer", "do not start the browser viewer")
-      ("vision-port", po::value<int>(), "SSL-Vision multicast port")
-      ("blue-port", po::value<int>(), "blue team's RobotControl port")
-      ("yellow-port", po::value<int>(), "yellow team's RobotControl port")
-      ("control-port", po::value<int>(), "simulation protocol: SimulatorCommand port")
-      ("grsim-port", po::value<int>(), "grSim protocol command port")
-      ("viewer-port", po::value<int>(), "browser viewer port")
       ("plugin-path", po::value<std::vector<std::string>>(&f.plugin_paths), "also search DIR for plugins (repeatable)")
       ("log-level", po::value<std::string>(&f.log_level)->default_value("warning"), "debug, info, warning or error");
+  AddPortFlags(desc);
   po::options_description match("match (docs/match.md)");
   f.match.AddTo(match);
   desc.add(match);
@@ -237,11 +235,7 @@ int MatchCommand(const std::vector<std::string>& args) {
   if (f.duration < 0 || f.speed < 0 || f.team_timeout < 0) throw UsageError("--duration, --speed and --team-timeout must be >= 0");
   // The world's match: block, then: a match is refereed.
   const bool referee_given = !vm["referee"].defaulted();
-  LogLevel level = LogLevel::kWarning;
-  if (f.log_level == "debug") level = LogLevel::kDebug;
-  if (f.log_level == "info") level = LogLevel::kInfo;
-  if (f.log_level == "error") level = LogLevel::kError;
-  StreamLog log(std::cerr, level);
+  StreamLog log(std::cerr, LogLevelOf(f.log_level));
 
   const fs::path world_file = f.world_arg.empty() ? DefaultWorldFile() : WorldFileOf(f.world_arg);
   LoadedWorld loaded = LoadWorldWithPlugins(world_file, f.plugin_paths);
@@ -251,9 +245,7 @@ int MatchCommand(const std::vector<std::string>& args) {
   if (f.match.referee == "none") throw UsageError("--referee none: a match needs a referee (builtin or gc)");
   f.overrides.local_only = vm.count("local-only") > 0;
   if (!vm["referee-port"].defaulted()) f.overrides.viewer_referee_port = f.match.referee_port;
-  for (const char* port : {"vision", "control", "blue", "yellow", "grsim", "viewer"}) {
-    if (vm.count(std::string(port) + "-port")) f.overrides.ports[port] = vm[std::string(port) + "-port"].as<int>();
-  }
+  ReadPortFlags(vm, f.overrides.ports);
   if (vm.count("no-viewer")) std::erase_if(model.transports, [](const TransportModel& t) { return t.plugin == "viewer"; });
   for (const std::string& note : ApplyRunOverrides(f.overrides, model, loaded.loading.loader, *loaded.loading.registry)) {
     std::cerr << "ubersim: " << note << "\n";
@@ -317,16 +309,15 @@ int MatchCommand(const std::vector<std::string>& args) {
       const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(f.team_timeout > 0 ? f.team_timeout : 1e9);
       for (;;) {
         world.ProcessEvents();  // commands are counted as they are applied
-        const auto& counts = world.event_counters().commands_received;
-        if (counts[1] > synced[0] && counts[0] > synced[1]) break;
+        const bool yellow_late = CommandsFrom(world, 0) <= synced[0];
+        const bool blue_late = CommandsFrom(world, 1) <= synced[1];
+        if (!yellow_late && !blue_late) break;
         for (int i = 0; i < 2; ++i) {
           if (!teams[i].ended) teams[i].ended = teams[i].process->Ended();
         }
-        const bool yellow_late = counts[1] <= synced[0], blue_late = counts[0] <= synced[1];
         if (teams[0].ended || teams[1].ended || std::chrono::steady_clock::now() > give_up || MatchInterrupted().load()) {
           if (MatchInterrupted().load()) break;
           const int late = teams[0].ended ? 0 : teams[1].ended ? 1 : yellow_late ? 0 : 1;
-          (void)blue_late;
           outcome = "team failed";
           reason = teams[late].ended ? std::string(colors[late]) + " team's program ended (" + *teams[late].ended + ")"
                                      : std::string(colors[late]) + " team did not answer within " +
@@ -337,8 +328,8 @@ int MatchCommand(const std::vector<std::string>& args) {
         }
         world.events().WaitForEvent(std::chrono::milliseconds(1));
       }
-      synced[0] = world.event_counters().commands_received[1];
-      synced[1] = world.event_counters().commands_received[0];
+      synced[0] = CommandsFrom(world, 0);
+      synced[1] = CommandsFrom(world, 1);
       next_sync_ns += frame_ns;
     }
     const auto now = std::chrono::steady_clock::now();
@@ -354,7 +345,7 @@ int MatchCommand(const std::vector<std::string>& args) {
         stop.store(true);
         return;
       }
-      const std::int64_t received = world.event_counters().commands_received[i == 0 ? 1 : 0];
+      const std::int64_t received = CommandsFrom(world, i);
       if (received != t.last_commands) {
         t.last_commands = received;
         t.last_heard_ns = world.clock().time_ns();

@@ -78,13 +78,7 @@ po::options_description RunOptionsOf(RunFlags& f) {
        "(what it asks for that is not modelled is listed at start)")
       ("field,g", po::value<std::string>(&f.overrides.field),
        "field: div-a or div-b (also ER-Force's 2020, 2023, 2023B); the formation scales with it")
-      ("vision-port", po::value<int>(), "SSL-Vision multicast port (default 10020; 10006 as real ssl-vision)")
       ("vision-address", po::value<std::string>(&f.overrides.vision_address), "SSL-Vision multicast group (default 224.5.23.2)")
-      ("control-port", po::value<int>(), "simulation protocol: SimulatorCommand port (default 10300)")
-      ("blue-port", po::value<int>(), "simulation protocol: blue team's RobotControl port (default 10301)")
-      ("yellow-port", po::value<int>(), "simulation protocol: yellow team's RobotControl port (default 10302)")
-      ("grsim-port", po::value<int>(), "grSim protocol command port (default 20011)")
-      ("viewer-port", po::value<int>(), "browser viewer port (default 8080)")
       ("no-viewer", "do not start the browser viewer (the same as --no-transport viewer)")
       ("no-transport", po::value<std::vector<std::string>>(&f.skipped_transports), "do not start the world's transport ID (repeatable)")
       ("plugin-path", po::value<std::vector<std::string>>(&f.plugin_paths), "also search DIR for plugins (repeatable)")
@@ -94,20 +88,12 @@ po::options_description RunOptionsOf(RunFlags& f) {
       ("crash-dir", po::value<std::string>(&f.crash_dir)->default_value("."), "where crash reports and their snapshots go")
       ("crash-snapshot-interval", po::value<double>(&f.crash_snapshot_interval)->default_value(1.0),
        "simulated seconds between the in-memory snapshots a crash report writes (0: none)");
+  AddPortFlags(desc);
   f.physics.AddTo(desc);
   po::options_description match("match (docs/match.md)");
   f.match.AddTo(match);
   desc.add(match);
   return desc;
-}
-
-// The --log-level; throws UsageError for another word.
-LogLevel LogLevelOf(const std::string& name) {
-  if (name == "debug") return LogLevel::kDebug;
-  if (name == "info") return LogLevel::kInfo;
-  if (name == "warning") return LogLevel::kWarning;
-  if (name == "error") return LogLevel::kError;
-  throw UsageError("unknown --log-level '" + name + "'");
 }
 
 // Applies the command line's changes to `model`: the overrides (their notes printed), the
@@ -116,9 +102,7 @@ void ApplyFlags(RunFlags& f, const po::variables_map& vm, WorldModel& model, con
   f.overrides.local_only = vm.count("local-only") > 0;
   f.match.FromWorld(model.match, vm);
   if (!vm["referee-port"].defaulted()) f.overrides.viewer_referee_port = f.match.referee_port;
-  for (const char* port : {"vision", "control", "blue", "yellow", "grsim", "viewer"}) {
-    if (vm.count(std::string(port) + "-port")) f.overrides.ports[port] = vm[std::string(port) + "-port"].as<int>();
-  }
+  ReadPortFlags(vm, f.overrides.ports);
   kernel::PhysicsOverrides physics;
   if (const auto why = f.physics.Problem(vm)) throw UsageError(*why);
   f.physics.Read(vm, "run", physics);

@@ -101,7 +101,6 @@ RefereeEngine::RefereeEngine(const RefereeConfig& config, const FieldGeometry& f
   msg_.set_match_type(config_.match_type);
   next_team_ = config_.first_kickoff;
   last_touch_team_ = config_.first_kickoff;
-  kicked_off_first_ = config_.first_kickoff;
 }
 
 std::uint64_t RefereeEngine::Micros(std::int64_t t_ns) const {
@@ -325,7 +324,7 @@ std::vector<FieldRequest> RefereeEngine::Update(const FieldView& v) {
     if (msg_.stage_time_left() <= 0) {
       SetStage(Referee::NORMAL_SECOND_HALF_PRE, v.t_ns);
       // The second half's kick-off goes to the team that did not kick off the first.
-      Stop(v.t_ns, Kickoff(Other(kicked_off_first_)), P2{0, 0});
+      Stop(v.t_ns, Kickoff(Other(config_.first_kickoff)), P2{0, 0});
     }
     return out;
   }
@@ -683,10 +682,8 @@ void RefereeEngine::WatchFouls(const FieldView& v, std::vector<FieldRequest>& ou
   if (c == Referee::STOP && Seconds(v.t_ns - t_stop_ns_) > kGraceTime) {
     for (const RobotView& r : v.robots) {
       if (!r.present || Speed(r.vel) <= kStopSpeed) continue;
-      const bool fouled = std::any_of(stop_speed_fouled_.begin(), stop_speed_fouled_.end(),
-                                      [&](const auto& p) { return p.first == r.id; });
-      if (fouled) continue;
-      stop_speed_fouled_.emplace_back(r.id, true);
+      if (std::find(stop_speed_fouled_.begin(), stop_speed_fouled_.end(), r.id) != stop_speed_fouled_.end()) continue;
+      stop_speed_fouled_.push_back(r.id);
       GameEvent e;
       e.set_type(GameEvent::BOT_TOO_FAST_IN_STOP);
       auto* f = e.mutable_bot_too_fast_in_stop();

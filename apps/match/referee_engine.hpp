@@ -163,11 +163,10 @@ class RefereeEngine {
   std::int64_t t_placement_progress_ns_ = 0;
   std::int64_t t_referee_placed_ns_ = -1;  // the simulator placed the ball then (-1: not in this stoppage)
   // Fouls and cards.
-  std::vector<std::pair<RobotId, bool>> stop_speed_fouled_;  // robots already fouled for speed in this stoppage
+  std::vector<RobotId> stop_speed_fouled_;  // robots already fouled for speed in this stoppage
   std::int64_t t_defender_grace_ns_[2] = {0, 0};
   std::int64_t t_too_many_ns_[2] = {0, 0};  // no TOO_MANY_ROBOTS for the team before then
   std::vector<RobotId> off_for_card_[2];  // robots taken off for a card, in order
-  Team kicked_off_first_ = Team::kYellow;
   // Autoreferee.
   P2 last_ball_;
   Referee::Command previous_command_ = Referee::HALT;

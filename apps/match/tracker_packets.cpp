@@ -10,10 +10,6 @@
 namespace ubersim::match {
 namespace {
 
-double Yaw(const Quat& q) {
-  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
-}
-
 }  // namespace
 
 std::string UuidFromSeed(std::uint64_t seed) {
@@ -58,7 +54,7 @@ TrackerWrapperPacket TrackedPacket(const WorldSnapshot& truth, std::uint32_t fra
     const double yaw_sigma = noise != nullptr ? noise->robot_orientation_sigma : 0.0;
     t->mutable_pos()->set_x(static_cast<float>(r.pose.position.x() + jitter(robot_sigma)));
     t->mutable_pos()->set_y(static_cast<float>(r.pose.position.y() + jitter(robot_sigma)));
-    t->set_orientation(static_cast<float>(std::remainder(Yaw(r.pose.orientation) + jitter(yaw_sigma), 2 * M_PI)));
+    t->set_orientation(static_cast<float>(std::remainder(r.pose.Yaw() + jitter(yaw_sigma), 2 * M_PI)));
     t->mutable_vel()->set_x(static_cast<float>(r.twist.linear.x()));
     t->mutable_vel()->set_y(static_cast<float>(r.twist.linear.y()));
     t->set_vel_angular(static_cast<float>(r.twist.angular.z()));

@@ -29,10 +29,6 @@ namespace {
 
 using kernel::World;
 
-double Yaw(const Quat& q) {
-  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
-}
-
 Team TeamOf(const std::string& name) {
   if (name == "blue") return Team::kBlue;
   if (name == "yellow") return Team::kYellow;
@@ -82,7 +78,7 @@ class PyWorld {
       id(i, 1) = r.id.id;
       p(i, 0) = r.pose.position.x();
       p(i, 1) = r.pose.position.y();
-      p(i, 2) = Yaw(r.pose.orientation);
+      p(i, 2) = r.pose.Yaw();
       v(i, 0) = r.twist.linear.x();
       v(i, 1) = r.twist.linear.y();
       v(i, 2) = r.twist.angular.z();

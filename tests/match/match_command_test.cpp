@@ -180,6 +180,9 @@ TEST(MatchCommand, BadUsageNamesWhatIsMissing) {
   const CliResult none = RunUbersim("match div-b --yellow true --blue true --referee none" + Ports(42480));
   EXPECT_EQ(none.exit_code, 2);
   EXPECT_NE(none.output.find("a match needs a referee"), std::string::npos) << none.output;
+  const CliResult level = RunUbersim("match div-b --yellow true --blue true --log-level loud" + Ports(42480));
+  EXPECT_EQ(level.exit_code, 2);
+  EXPECT_NE(level.output.find("unknown --log-level 'loud'"), std::string::npos) << level.output;
 }
 
 }  // namespace
