@@ -43,8 +43,12 @@ MatchSession::MatchSession(kernel::World& world, MatchOptions options, Log& log)
     o.name = name;
     return std::make_unique<transport::MulticastSender>(o);
   };
+  // The field as the geometry packets describe it: recorded, and sent to a game controller.
+  const WorldSnapshot truth = world_.GroundTruth();
+  senders_->geometry.field = *truth.field;
+  for (const auto& c : world_.perception().cameras) senders_->geometry.cameras.push_back({c.id, c.position});
+  senders_->geometry.ball_radius = truth.ball.radius;
   if (options_.referee) {
-    const WorldSnapshot truth = world_.GroundTruth();
     const RefereeMode mode = options_.game_controller.empty() ? RefereeMode::kGameController : RefereeMode::kAutoref;
     referee_ = std::make_unique<RefereeEngine>(*options_.referee, *truth.field, UnixOffset(), mode);
     if (mode == RefereeMode::kAutoref) link_ = std::make_unique<GameControllerLink>(options_.game_controller);
@@ -56,10 +60,6 @@ MatchSession::MatchSession(kernel::World& world, MatchOptions options, Log& log)
     if (options_.network) senders_->tracker = sender(options_.tracker_address, options_.tracker_port, "tracker");
   }
   if (options_.recorder) {
-    const WorldSnapshot truth = world_.GroundTruth();
-    senders_->geometry.field = *truth.field;
-    for (const auto& c : world_.perception().cameras) senders_->geometry.cameras.push_back({c.id, c.position});
-    senders_->geometry.ball_radius = truth.ball.radius;
     // The detections' own time stamps on the session's clock, so they agree with the records'.
     senders_->vision_clock = std::make_unique<transport::WireClock>(
         options_.unix_timestamps ? transport::TimestampMode::kUnix : transport::TimestampMode::kSim,
@@ -160,11 +160,7 @@ void MatchSession::ExchangeWithGameController(const WorldSnapshot& truth, std::i
   *in.mutable_tracker_packet() = TrackedPacket(truth, ci_frame_++, UnixOffset(), {tracker_uuid_, "UberSim ground truth"});
   if (!ci_started_) {
     // The field once, and the engine's events accepted without a human (behaviour ACCEPT, §1.6).
-    ssl_vision::GeometryInputs g;
-    g.field = *truth.field;
-    g.ball_radius = truth.ball.radius;
-    for (const auto& c : world_.perception().cameras) g.cameras.push_back({c.id, c.position});
-    *in.mutable_geometry() = ssl_vision::GeometryPacket(g).geometry();
+    *in.mutable_geometry() = ssl_vision::GeometryPacket(senders_->geometry).geometry();
     Input* config = in.add_api_inputs();
     for (const char* type : {"BALL_LEFT_FIELD_TOUCH_LINE", "BALL_LEFT_FIELD_GOAL_LINE", "POSSIBLE_GOAL",
                              "PLACEMENT_SUCCEEDED", "BOT_TOO_FAST_IN_STOP", "DEFENDER_TOO_CLOSE_TO_KICK_POINT"}) {

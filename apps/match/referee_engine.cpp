@@ -175,7 +175,7 @@ void RefereeEngine::OnCommand(Referee::Command command, std::int64_t t_ns) {
     if (autoref()) {
       placing_team_ = TeamOf(command);
       t_placement_ns_ = t_ns;
-      const P2 target{msg_.designated_position().x() / 1000.0, msg_.designated_position().y() / 1000.0};
+      const P2 target = Designated();
       placement_best_ = Dist(last_ball_, target);
       t_placement_progress_ns_ = t_ns;
     }
@@ -493,9 +493,13 @@ void RefereeEngine::WatchRunning(const FieldView& v, std::vector<FieldRequest>& 
   }
 }
 
+P2 RefereeEngine::Designated() const {
+  return {msg_.designated_position().x() / 1000.0, msg_.designated_position().y() / 1000.0};  // mm on the wire
+}
+
 bool RefereeEngine::PlacementNeeded(const FieldView& v, bool exact) const {
   if (!msg_.has_designated_position()) return false;
-  const P2 target{msg_.designated_position().x() / 1000.0, msg_.designated_position().y() / 1000.0};
+  const P2 target = Designated();
   if (exact) return Dist(v.ball, target) > config_.placement_tolerance;
   return Dist(v.ball, target) > kPlacementNeeded || !rules_.InsideField(v.ball) ||
          rules_.DistanceToDefenseArea(v.ball) < kDefenseAreaClearance || Speed(v.ball_vel) > kSteadySpeed;
@@ -556,7 +560,7 @@ void RefereeEngine::WatchStop(const FieldView& v, std::vector<FieldRequest>& out
   const bool referee_places = IsKickoff(next) || next == Referee::FORCE_START || next == Referee::PREPARE_PENALTY_BLUE ||
                               next == Referee::PREPARE_PENALTY_YELLOW;
   if (PlacementNeeded(v, IsKickoff(next))) {
-    const P2 target{msg_.designated_position().x() / 1000.0, msg_.designated_position().y() / 1000.0};
+    const P2 target = Designated();
     if (referee_places || placement_attempts_ >= 2 || !CanPlace(next_team_)) {
       // Kick-offs, penalties, force starts, and free kicks no team may place: the referee
       // (the simulator) places the ball, once the robots had time to stop.
@@ -593,7 +597,7 @@ void RefereeEngine::WatchStop(const FieldView& v, std::vector<FieldRequest>& out
 }
 
 void RefereeEngine::WatchPlacement(const FieldView& v, std::vector<FieldRequest>& out) {
-  const P2 target{msg_.designated_position().x() / 1000.0, msg_.designated_position().y() / 1000.0};
+  const P2 target = Designated();
   const double d = Dist(v.ball, target);
   if (d < placement_best_ - 0.1) {
     placement_best_ = d;
@@ -803,7 +807,7 @@ void RefereeEngine::Autoref(const FieldView& v, std::vector<FieldRequest>& out) 
       (next_is_kickoff || IsKickoff(c)) && PlacementNeeded(v, true) &&
       Seconds(v.t_ns - t_command_ns_) >= config_.resume_after_halt &&
       (t_referee_placed_ns_ < 0 || Seconds(v.t_ns - t_referee_placed_ns_) > 1.0)) {
-    const P2 target{msg_.designated_position().x() / 1000.0, msg_.designated_position().y() / 1000.0};
+    const P2 target = Designated();
     RefereePlaces(target, v.t_ns, out);
   }
   if (c == Referee::HALT && !control_requested_ && !IsBreak(stage) &&

@@ -124,6 +124,7 @@ class RefereeEngine {
   void EndOfHalf(std::int64_t t_ns);
   bool Ready(const FieldView& v, Referee::Command next) const;
   bool PlacementNeeded(const FieldView& v, bool exact) const;
+  P2 Designated() const;  // the designated position, m
   void RefereePlaces(P2 where, std::int64_t t_ns, std::vector<FieldRequest>& out);
   Referee::TeamInfo& Info(Team t);
   const Referee::TeamInfo& Info(Team t) const;
