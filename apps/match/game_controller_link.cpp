@@ -52,7 +52,10 @@ struct GameControllerLink::Impl {
       done = true;
     });
     if (!RunUntil(done)) Fail("no answer within " + std::to_string(timeout.count()) + " ms");
-    if (error) Fail(error == asio::error::eof ? "closed the connection" : error.message());
+    if (error == asio::error::eof || error == asio::error::connection_reset) {
+      Fail("hung up (" + std::string(error == asio::error::eof ? "closed the connection" : "connection reset by peer") + ")");
+    }
+    if (error) Fail(error.message());
     decoder.Append(std::string_view(buffer.data(), n));
   }
 

@@ -5,6 +5,9 @@
 
 #include <cmath>
 #include <memory>
+#include <thread>
+
+#include <boost/asio.hpp>
 
 #include "refereed_world.hpp"
 #include "standin_game_controller.hpp"
@@ -94,6 +97,37 @@ TEST(GameControllerCi, TheEngineIsTheAutorefereeOfAGameControllerInLockStep) {
   const auto outputs = m.gc.Outputs();
   ASSERT_EQ(m.published.size(), outputs.size());
   for (std::size_t i = 0; i < outputs.size(); ++i) ASSERT_EQ(m.published[i], outputs[i].SerializeAsString()) << i;
+}
+
+TEST(GameControllerCi, AGameControllerThatHangsUpIsAClearErrorNotAHang) {
+  // Accepts, reads the first input, and closes without answering.
+  boost::asio::io_context io;
+  boost::asio::ip::tcp::acceptor acceptor(io, {boost::asio::ip::make_address("127.0.0.1"), 0});
+  std::thread server([&] {
+    boost::asio::ip::tcp::socket socket(io);
+    acceptor.accept(socket);
+    char byte[256];
+    boost::system::error_code ignored;
+    socket.read_some(boost::asio::buffer(byte), ignored);
+  });
+  testing::ShippedWorlds shipped;
+  const kernel::WorldModel model = shipped.Load("div-b");
+  kernel::World world(model, shipped.registry, shipped.log, false);
+  MatchOptions o;
+  o.referee = RefereeConfig{};
+  o.game_controller = "127.0.0.1:" + std::to_string(acceptor.local_endpoint().port());
+  o.network = false;
+  MatchSession session(world, o, shipped.log);
+  world.Step();
+  try {
+    session.AfterStep();
+    FAIL() << "no error from a game controller that closed the connection";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("game controller " + o.game_controller + ": hung up (connection reset by peer)"),
+              std::string::npos)
+        << e.what();
+  }
+  server.join();
 }
 
 TEST(GameControllerCi, NoGameControllerIsAClearErrorNamingTheAddress) {
