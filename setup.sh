@@ -20,6 +20,7 @@ PACKAGES=(
   libprotobuf-dev protobuf-compiler
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-protobuf python3-yaml python3-dev pybind11-dev python3-numpy python3-pytest
+  python3-distributed python3-venv python3-pip python3-setuptools python3-wheel
   iproute2
 )
 # The viewer's end-to-end test drives a real browser: Debian's Chromium through its chromedriver

@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "module_common.hpp"
+#include "shared/random_play.hpp"
 #include "shared/world_loading.hpp"
 #include "ubersim/kernel/logging.hpp"
 #include "ubersim/kernel/model.hpp"
@@ -35,35 +37,61 @@ Team TeamOf(const std::string& name) {
   throw py::value_error("team must be 'blue' or 'yellow', not '" + name + "'");
 }
 
+// Releases the GIL, then takes the process's ODE lock (in that order: a thread waiting for ODE
+// must not hold the GIL the stepping thread may need).
+struct OdeSection {
+  py::gil_scoped_release release;
+  std::lock_guard<std::mutex> ode{OdeMutex()};
+};
+
 // One world with what it was loaded with (the registry outlives the world: its plugins' code).
 class PyWorld {
  public:
-  PyWorld(const std::string& world, const std::vector<std::string>& plugin_paths, std::optional<std::uint64_t> seed,
-          std::optional<std::string> profile)
-      : loaded_(apps::LoadWorldWithPlugins(apps::WorldFileOf(world), plugin_paths)), log_(log_text_, LogLevel::kWarning) {
-    if (seed) loaded_.model.seed = *seed;
-    if (profile && !kernel::PhysicsProfile(*profile, loaded_.model.physics)) {
-      throw py::value_error("unknown physics profile '" + *profile + "'");
-    }
-    loaded_.model.transports.clear();  // no sockets: Python drives the world itself
+  explicit PyWorld(const WorldSettings& settings)
+      : loaded_(LoadForPython(settings)), log_(log_text_, LogLevel::kWarning) {
+    OdeSection ode;
     world_ = std::make_unique<World>(loaded_.model, *loaded_.loading.registry, log_, false);
   }
 
   void Step(int steps) {
     if (steps < 0) throw py::value_error("steps must be >= 0");
-    py::gil_scoped_release release;
-    for (int i = 0; i < steps; ++i) world_->Step();
+    OdeSection ode;
+    for (int i = 0; i < steps; ++i) {
+      if (random_play_) random_play_->BeforeStep();
+      world_->Step();
+    }
   }
+  // The bench's random play drives every robot from now on (None: stops it).
+  void RandomPlay(std::optional<std::uint64_t> seed) {
+    if (!seed) {
+      random_play_.reset();
+      return;
+    }
+    OdeSection ode;
+    random_play_ = std::make_unique<apps::RandomPlay>(*world_, *seed);
+  }
+  py::dict Field() const { return FieldDict(world_->model().field->geometry); }
   double Time() const { return world_->clock().seconds(); }
   std::int64_t Steps() const { return world_->clock().steps(); }
   double StepSeconds() const { return static_cast<double>(world_->clock().step_ns()) * 1e-9; }
   std::uint64_t Hash() const { return world_->StateHash(); }
   std::string Name() const { return loaded_.model.name; }
-  void Reset() { world_->Reset(); }
+  void Reset(std::optional<std::uint64_t> seed) {
+    OdeSection ode;
+    random_play_.reset();
+    if (seed) {
+      world_->Reset(*seed);
+    } else {
+      world_->Reset();
+    }
+  }
 
   // The state as numpy arrays: robots in the world's order (blue first, then yellow, by id).
   py::dict State() const {
-    const WorldSnapshot s = world_->GroundTruth();
+    const WorldSnapshot s = [this] {
+      OdeSection ode;
+      return world_->GroundTruth();
+    }();
     const auto n = static_cast<py::ssize_t>(s.robots.size());
     py::array_t<std::int32_t> ids({n, py::ssize_t{2}});
     py::array_t<double> pose({n, py::ssize_t{3}}), vel({n, py::ssize_t{3}});
@@ -111,7 +139,7 @@ class PyWorld {
     }
     if (kick_speed > 0) e.kick = KickCommand{kick_speed, chip_angle};
     e.dribbler_speed = dribbler;
-    world_->events().Post(std::move(e));
+    world_->events().Post(std::move(e));  // the queue is thread-safe: no ODE here
   }
 
   void PlaceBall(double x, double y, double z, double vx, double vy, double vz) {
@@ -121,6 +149,7 @@ class PyWorld {
     e.velocity = Vec3(vx, vy, vz);
     e.angular_velocity = Vec3::Zero();
     world_->events().Post(std::move(e));
+    OdeSection ode;
     world_->ProcessEvents();
   }
 
@@ -133,11 +162,24 @@ class PyWorld {
     e.angular_velocity = Vec3::Zero();
     e.present = present;
     world_->events().Post(std::move(e));
+    OdeSection ode;
     world_->ProcessEvents();
   }
 
-  py::bytes Save() const { return py::bytes(kernel::EncodeSnapshot(world_->Save())); }
-  void Restore(const std::string& bytes) { world_->Restore(kernel::DecodeSnapshot(bytes, "the snapshot given to restore")); }
+  py::bytes Save() const {
+    std::string bytes;
+    {
+      OdeSection ode;
+      bytes = kernel::EncodeSnapshot(world_->Save());
+    }
+    return py::bytes(bytes);
+  }
+  void Restore(const std::string& bytes) {
+    const kernel::SavedState state = kernel::DecodeSnapshot(bytes, "the snapshot given to restore");
+    OdeSection ode;
+    random_play_.reset();
+    world_->Restore(state);
+  }
   std::string LogText() const { return log_text_.str(); }
 
  private:
@@ -145,13 +187,18 @@ class PyWorld {
   std::ostringstream log_text_;
   kernel::StreamLog log_;
   std::unique_ptr<World> world_;
+  std::unique_ptr<apps::RandomPlay> random_play_;
 };
 
 }  // namespace
+
+void BindVectorWorlds(py::module_& m);  // vector_bindings.cpp
+
 }  // namespace ubersim::python
 
 PYBIND11_MODULE(_ubersim, m) {
   using ubersim::python::PyWorld;
+
   m.doc() = "ÜberSim's kernel for Python: one world, stepped, read and commanded (docs/python.md).";
   // The CLI's errors, with its exit codes (docs/cli.md): ModelError 3, PluginError 4, SnapshotError 1.
   static py::exception<std::runtime_error> model_error(m, "ModelError", PyExc_ValueError);
@@ -178,12 +225,19 @@ PYBIND11_MODULE(_ubersim, m) {
     }
   });
   py::class_<PyWorld>(m, "World", "One simulated SSL field (a world file or a shipped world's name).")
-      .def(py::init<const std::string&, const std::vector<std::string>&, std::optional<std::uint64_t>,
-                    std::optional<std::string>>(),
+      .def(py::init([](const std::string& world, const std::vector<std::string>& plugin_paths,
+                       std::optional<std::uint64_t> seed, std::optional<std::string> profile,
+                       std::optional<py::dict> physics, std::optional<std::string> robot) {
+             return std::make_unique<PyWorld>(ubersim::python::WorldSettings{
+                 world, plugin_paths, seed, profile, physics.value_or(py::dict()), robot});
+           }),
            py::arg("world"), py::arg("plugin_paths") = std::vector<std::string>{}, py::arg("seed") = py::none(),
-           py::arg("profile") = py::none(),
-           "Loads WORLD (a file, or a shipped world's name such as 'div-b') with its plugins, without sockets.")
+           py::arg("profile") = py::none(), py::arg("physics") = py::none(), py::arg("robot") = py::none(),
+           "Loads WORLD (a file, or a shipped world's name such as 'div-b') with its plugins, without sockets; "
+           "`physics` sets physics keys over the profile, `robot` a robot model file for every robot.")
       .def("step", &PyWorld::Step, py::arg("steps") = 1, "Advances the world by `steps` physics steps.")
+      .def("random_play", &PyWorld::RandomPlay, py::arg("seed"),
+           "The bench's seeded random play drives every robot from now on (None stops it).")
       .def("state", &PyWorld::State, "The state now as numpy arrays (SI units, the field frame).")
       .def("command", &PyWorld::Command, py::arg("team"), py::arg("id"), py::arg("vx") = 0.0, py::arg("vy") = 0.0,
            py::arg("angular") = 0.0, py::arg("global_frame") = false, py::arg("kick_speed") = 0.0,
@@ -195,11 +249,14 @@ PYBIND11_MODULE(_ubersim, m) {
            py::arg("yaw") = 0.0, py::arg("present") = true, "Puts a robot at (x, y) m heading yaw rad, or off the field.")
       .def("save", &PyWorld::Save, "The world's full state as bytes (a snapshot).")
       .def("restore", &PyWorld::Restore, py::arg("snapshot"), "Puts a saved state back: stepping on is bit-identical.")
-      .def("reset", &PyWorld::Reset, "Puts everything back where the world file has it.")
+      .def("reset", &PyWorld::Reset, py::arg("seed") = py::none(),
+           "Puts everything back where the world file has it (with another seed when given).")
+      .def_property_readonly("field", &PyWorld::Field, "The field's geometry: sizes (m) and markings.")
       .def_property_readonly("time", &PyWorld::Time, "Simulated time, s.")
       .def_property_readonly("steps", &PyWorld::Steps, "Physics steps since the start.")
       .def_property_readonly("step_seconds", &PyWorld::StepSeconds, "The physics step, s.")
       .def_property_readonly("state_hash", &PyWorld::Hash, "A hash of every body's state, bit for bit.")
       .def_property_readonly("name", &PyWorld::Name, "The world's name.")
       .def_property_readonly("log", &PyWorld::LogText, "What the world logged (warnings and errors).");
+  ubersim::python::BindVectorWorlds(m);
 }

@@ -19,13 +19,17 @@ constexpr double kBallSpeed = 6.5;                    // m/s, the rules' limit
 
 }  // namespace
 
-RandomPlay::RandomPlay(World& world, std::uint64_t seed) : world_(world), rng_(seed) {
+RandomPlay::RandomPlay(World& world, std::uint64_t seed, std::optional<Team> team) : world_(world), rng_(seed) {
   const FieldGeometry& f = world.model().field->geometry;
   half_length_ = 0.5 * f.field_length;
   half_width_ = 0.5 * f.field_width;
-  for (const RobotState& r : world.GroundTruth().robots) {
+  const std::vector<RobotState> robots = world.GroundTruth().robots;
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    const RobotState& r = robots[i];
+    if (team && r.id.team != *team) continue;
     Player p;
     p.id = r.id;
+    p.index = i;
     for (const RobotPlacement& placed : world.model().robots) {
       if (placed.id == r.id) {
         p.dribbler = placed.model->dribbler.has_value();
@@ -56,10 +60,10 @@ bool RandomPlay::BeforeStep() {
   if (now >= next_radio_ns_) {
     next_radio_ns_ = now + kRadioPeriodNs;
     std::bernoulli_distribution kick(0.02);
-    for (std::size_t i = 0; i < players_.size() && i < s.robots.size(); ++i) {
-      Player& p = players_[i];
+    for (Player& p : players_) {
+      if (p.index >= s.robots.size()) continue;
       if (now >= p.next_target_ns) NewTarget(p, now);
-      const Vec3 at = s.robots[i].pose.position;
+      const Vec3 at = s.robots[p.index].pose.position;
       const Vec3 to(p.target_x - at.x(), p.target_y - at.y(), 0.0);
       const double distance = to.norm();
       // Slow down over the last half metre, as a path controller would.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -17,14 +18,16 @@ using kernel::World;
 /// the same events a team's software sends, through the same kernel paths.
 class RandomPlay {
  public:
-  /// Plays in `world` with this seed.
-  RandomPlay(World& world, std::uint64_t seed);
+  /// Plays in `world` with this seed: every robot, or only `team`'s (the ball is kept in play
+  /// either way).
+  RandomPlay(World& world, std::uint64_t seed, std::optional<Team> team = std::nullopt);
   /// Posts the commands due before the next step; true when it moved the ball.
   bool BeforeStep();
 
  private:
   struct Player {
     RobotId id;
+    std::size_t index = 0;  // in the ground truth's robots
     bool dribbler = false, kicker = false;
     double target_x = 0, target_y = 0, speed = 1, turn = 0;
     std::int64_t next_target_ns = 0;

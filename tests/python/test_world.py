@@ -104,7 +104,16 @@ def test_errors_carry_the_command_lines_text_and_exit_code():
 def test_the_stubs_name_every_public_member_of_the_module():
     # An editor completes from __init__.pyi: it must list what the module really has.
     stub = open(os.path.join(os.path.dirname(ubersim.__file__), "__init__.pyi")).read()
-    for name in [n for n in dir(ubersim.World) if not n.startswith("_")]:
-        assert f"def {name}(" in stub, name
+    for cls in (ubersim.World, ubersim.VectorEnv, ubersim.Env, ubersim.ParallelEnv):
+        body = stub.split(f"class {cls.__name__}")[1].split("\nclass ")[0]
+        for name in [n for n in dir(cls) if not n.startswith("_")]:
+            if callable(getattr(cls, name)) or isinstance(getattr(cls, name), property):
+                assert f"def {name}(" in body, (cls.__name__, name)
     for name in ubersim.__all__:
-        assert f"class {name}" in stub, name
+        kind = type(getattr(ubersim, name)).__name__
+        if kind == "module":
+            assert f"import {name} as {name}" in stub, name
+        elif kind == "function":
+            assert f"import {name} as {name}" in stub, name
+        else:
+            assert f"class {name}" in stub, name

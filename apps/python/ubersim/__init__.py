@@ -10,22 +10,22 @@
 Errors carry the command line's text and exit code: ModelError (3, file:line:column: key),
 PluginError (4), SnapshotError (1). docs/python.md.
 """
-import os as _os
-
+from ._paths import plugin_paths as _plugin_paths
 from ._ubersim import ModelError, PluginError, SnapshotError  # noqa: F401
 from ._ubersim import World as _World
-
-__all__ = ["World", "ModelError", "PluginError", "SnapshotError"]
-
-# In the build tree the plugins are at <build>/lib/ubersim/plugins, beside <build>/python/ubersim.
-_BUILD_PLUGINS = _os.path.normpath(_os.path.join(_os.path.dirname(__file__), "..", "..", "lib", "ubersim", "plugins"))
 
 
 class World(_World):
     """One simulated SSL field: loaded as `ubersim run` loads it (its plugins too), no transports."""
 
-    def __init__(self, world, plugin_paths=(), seed=None, profile=None):
-        paths = list(plugin_paths)
-        if _os.path.isdir(_BUILD_PLUGINS):
-            paths.append(_BUILD_PLUGINS)
-        super().__init__(str(world), paths, seed, profile)
+    def __init__(self, world, plugin_paths=(), seed=None, profile=None, physics=None, robot=None):
+        super().__init__(str(world), _plugin_paths(plugin_paths), seed, profile, physics,
+                         None if robot is None else str(robot))
+
+
+from . import tasks  # noqa: E402
+from .env import Env, ParallelEnv, VectorEnv  # noqa: E402
+from .render import render_field  # noqa: E402
+
+__all__ = ["World", "VectorEnv", "Env", "ParallelEnv", "tasks", "render_field", "ModelError", "PluginError",
+           "SnapshotError"]

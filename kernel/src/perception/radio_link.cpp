@@ -21,6 +21,11 @@ RadioLink::RadioLink(RadioModel model, std::uint64_t seed)
   Reset();
 }
 
+void RadioLink::Reset(std::uint64_t seed) {
+  seed_ = seed;
+  Reset();
+}
+
 void RadioLink::Reset() {
   queue_.clear();
   rng_.seed(seed_ ^ kRadioStream);

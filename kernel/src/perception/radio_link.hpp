@@ -24,6 +24,8 @@ class RadioLink {
   std::vector<CommandEvent> Deliver(std::int64_t now_ns);
   /// Forgets queued commands (world reset).
   void Reset();
+  /// Reset with another seed (the world reset with a new seed).
+  void Reset(std::uint64_t seed);
   /// Changes latency and loss while running.
   void Configure(const RadioModel& model);
   /// The configuration.

@@ -30,6 +30,11 @@ PerceptionPipeline::PerceptionPipeline(PerceptionModel model, std::uint64_t seed
   Reset();
 }
 
+void PerceptionPipeline::Reset(std::uint64_t seed) {
+  seed_ = seed;
+  Reset();
+}
+
 void PerceptionPipeline::Reset() {
   next_capture_ns_.assign(model_.cameras.size(), period_ns_);
   frame_numbers_.assign(model_.cameras.size(), 0);

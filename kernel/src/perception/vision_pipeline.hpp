@@ -29,6 +29,8 @@ class PerceptionPipeline {
   std::vector<VisionFrame> Release(std::int64_t now_ns);
   /// Forgets queued frames and restarts the schedule (world reset).
   void Reset();
+  /// Reset with another seed (the world reset with a new seed).
+  void Reset(std::uint64_t seed);
   /// Changes noise, drop-outs, overlap and latency while running; frame rate and cameras stay.
   void Configure(const PerceptionModel& model);
   /// Other cameras (another field): a camera id kept keeps its frame numbers and schedule, a new

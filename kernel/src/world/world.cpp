@@ -17,6 +17,7 @@ World::~World() = default;
 void World::Step() { impl_->Step(); }
 void World::ProcessEvents() { impl_->ProcessEvents(); }
 void World::Reset() { impl_->Reset(); }
+void World::Reset(std::uint64_t seed) { impl_->Reset(seed); }
 SavedState World::Save() const { return impl_->Save(); }
 void World::Restore(const SavedState& state) { impl_->Restore(state); }
 bool World::stopped() const { return impl_->stopped(); }

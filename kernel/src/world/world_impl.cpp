@@ -374,6 +374,13 @@ void WorldImpl::RebuildRobot(Robot& robot, EventAnswer& answer) {
   built->Placed();
 }
 
+void WorldImpl::Reset(std::uint64_t seed) {
+  model_.seed = seed;
+  perception_.Reset(seed);
+  radio_.Reset(seed);
+  Reset();
+}
+
 void WorldImpl::Reset() {
   roster_ = model_.robots;
   if (model_.field != initial_field_) UseField(initial_field_);

@@ -56,6 +56,7 @@ class WorldImpl {
   void ProcessEvents();
   /// Puts everything back where the world file has it; the clock restarts at 0.
   void Reset();
+  void Reset(std::uint64_t seed);
 
   /// The world's full state now (a step boundary), for a snapshot file. Throws PluginError
   /// naming the part whose SaveState throws.

@@ -71,6 +71,9 @@ class World {
   void ProcessEvents();
   /// Puts everything back where the world file has it; the clock restarts at 0.
   void Reset();
+  /// Reset with another seed for every random process (noise, radio loss, ODE's generator): a
+  /// new episode of the same world, as a world file with that seed would give it.
+  void Reset(std::uint64_t seed);
 
   /// The world's full state now (a step boundary), for a snapshot file (snapshot.hpp). Throws
   /// PluginError naming the part whose SaveState throws.
