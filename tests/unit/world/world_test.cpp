@@ -57,6 +57,41 @@ TEST(World, DeterministicWhileAnotherWorldStepsInBetween) {
   EXPECT_EQ(one.StateHash(), two.StateHash());
 }
 
+// The ball's reported positions (noise on) of the first `steps` steps.
+std::vector<double> SeenBall(World& world, int steps) {
+  std::vector<double> seen;
+  world.SetVisionObserver([&seen](const VisionFrame& f) {
+    for (const DetectedBall& b : f.balls) seen.push_back(b.x);
+  });
+  for (int i = 0; i < steps; ++i) world.Step();
+  return seen;
+}
+
+WorldModel NoisyBallWorld(std::uint64_t seed) {
+  WorldModel model = testing::BallWorld(Vec3(0.5, 0.2, 0));
+  model.seed = seed;
+  model.perception.ball_position_sigma = 0.01;
+  model.perception.ball_drop = 0.2;
+  CameraModel camera;
+  camera.x_min = -5, camera.x_max = 5, camera.y_min = -4, camera.y_max = 4;
+  model.perception.cameras.push_back(camera);
+  return model;
+}
+
+TEST(World, ResetWithASeedIsTheWorldBuiltWithThatSeed) {
+  Fixture f;
+  World fresh(NoisyBallWorld(7), f.registry, f.log, false);
+  const std::vector<double> expected = SeenBall(fresh, 500);
+  World reseeded(NoisyBallWorld(1), f.registry, f.log, false);
+  const std::vector<double> first = SeenBall(reseeded, 500);
+  ASSERT_GT(expected.size(), 10u);
+  EXPECT_NE(first, expected);  // another seed: other noise, other drop-outs
+  reseeded.Reset(7);
+  EXPECT_EQ(SeenBall(reseeded, 500), expected);
+  EXPECT_EQ(reseeded.StateHash(), fresh.StateHash());
+  EXPECT_EQ(reseeded.model().seed, 7u);
+}
+
 TEST(World, DroppedBallComesToRestOnTheCarpet) {
   Fixture f;
   World world(testing::BallWorld(Vec3(1.0, 0.5, 0.5)), f.registry, f.log, false);
