@@ -322,3 +322,15 @@ def test_fast_is_the_default_profile_and_precise_one_argument_away():
     precise = ubersim.VectorEnv("div-b", 1, profile="precise")
     assert precise.worlds.profile == "precise" and precise.dt == pytest.approx(5 * 0.001)
     assert ubersim.VectorEnv("div-b", 1).dt == pytest.approx(5 * 0.005)
+
+
+def test_observations_are_copies_unless_asked_for_the_buffer():
+    env = ubersim.VectorEnv("div-b", 2, opponent="random", seed=0)
+    first, _ = env.reset(seed=0)
+    kept = first.copy()
+    second, *_ = env.step(np.zeros(env.action_space.shape, np.float32))
+    assert np.array_equal(first, kept) and not np.array_equal(first, second)
+    shared = ubersim.VectorEnv("div-b", 2, opponent="random", seed=0, copy=False)
+    first, _ = shared.reset(seed=0)
+    second, *_ = shared.step(np.zeros(shared.action_space.shape, np.float32))
+    assert first is second and np.array_equal(first, second)

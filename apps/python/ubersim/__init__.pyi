@@ -121,8 +121,10 @@ class VectorEnv:
                  controlled: str = "blue", opponent: str = "idle", frame_skip: int = 5,
                  max_episode_steps: Optional[int] = None, camera_features: bool = False,
                  render_mode: Optional[str] = None, seed: Optional[int] = None, profile: Optional[str] = "fast",
-                 physics: Physics = None, robot: Optional[str] = None, plugin_paths: Iterable[str] = ()) -> None:
-        """controlled: 'blue', 'yellow', 'both' or 'none'; opponent: 'idle', 'scripted' or 'random'."""
+                 physics: Physics = None, robot: Optional[str] = None, plugin_paths: Iterable[str] = (),
+                 copy: bool = True) -> None:
+        """controlled: 'blue', 'yellow', 'both' or 'none'; opponent: 'idle', 'scripted' or 'random';
+        copy=False: observations are the env's own buffer, overwritten by the next step."""
     def reset(self, *, seed: Optional[Union[int, Sequence[int]]] = None,
               options: Optional[Dict[str, Any]] = None) -> Tuple[Array, Dict[str, Any]]:
         """Starts a new episode in every world; world k gets seed + k (or its own of a list)."""

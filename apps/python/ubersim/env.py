@@ -192,14 +192,16 @@ class VectorEnv(VectorEnvBase):
     opponent: 'idle', 'scripted' (a baseline team) or 'random' (the bench's random play) for the
     team not controlled. task: a Task (ubersim.tasks) or a callable (obs, actions, env) →
     (reward K or K × 2, terminated K). Worlds reset on their own when done (same step: the
-    final observation is in info['final_obs'])."""
+    final observation is in info['final_obs']). copy=False returns the env's own observation
+    buffer, overwritten by the next step, instead of a copy (as gymnasium's vector envs' copy)."""
 
     metadata = {"render_modes": ["rgb_array"], "autoreset_mode": "SameStep"}
 
     def __init__(self, world="div-b", num_envs=1, *, task=None, controlled="blue", opponent="idle", frame_skip=5,
                  max_episode_steps=None, camera_features=False, render_mode=None, seed=None, profile="fast",
-                 physics=None, robot=None, plugin_paths=()):
+                 physics=None, robot=None, plugin_paths=(), copy=True):
         blue, yellow = _drivers(controlled, opponent)
+        self._copy = bool(copy)
         self._w = _Worlds(world, num_envs, blue=blue, yellow=yellow, task=task, frame_skip=frame_skip,
                           max_episode_steps=max_episode_steps, camera_features=camera_features, seed=seed,
                           profile=profile, physics=physics, robot=robot, plugin_paths=plugin_paths)
@@ -258,7 +260,7 @@ class VectorEnv(VectorEnvBase):
             self.action_space.seed(seed)
             self.single_action_space.seed(seed)
         self._w.reset(np.arange(self.num_envs))
-        return self._w.obs.copy(), self._info()
+        return self._observation(), self._info()
 
     def step(self, actions):
         """One env step: (obs, reward, terminated, truncated, info), arrays over the K worlds."""
@@ -268,7 +270,10 @@ class VectorEnv(VectorEnvBase):
         if final is not None:
             info["final_obs"] = final
             info["_final_obs"] = done
-        return self._w.obs.copy(), reward[:, self._team].copy(), terminated, truncated, info
+        return self._observation(), reward[:, self._team].copy(), terminated, truncated, info
+
+    def _observation(self):
+        return self._w.obs.copy() if self._copy else self._w.obs
 
     def _info(self):
         return {"episode_step": self._w.episode_steps.copy(), "episode": self._w.episodes.copy()}
