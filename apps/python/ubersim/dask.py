@@ -21,10 +21,10 @@ a policy that raises) comes back with `error` set and the others finish. The sam
 same state hashes on one worker or many: a world is deterministic per seed.
 
 One world per thread at a time: ODE keeps one process-wide random generator (each world saves and
-restores its own sequence around its step), so the module serialises every ODE call of a process
-behind one lock. Two threads of one worker then take turns instead of running side by side: start
-workers with one thread each (`threads_per_worker=1`, `dask worker --nthreads 1`) and as many
-worker processes as cores. The tasks here use no threads of their own.
+restores its own sequence around its step), so ubersim's C++ module serialises every ODE call of
+a process behind one lock. Two threads of one worker then take turns instead of running side by
+side: start workers with one thread each (`threads_per_worker=1`, `dask worker --nthreads 1`) and
+as many worker processes as cores. The tasks here use no threads of their own.
 
 This module imports `distributed` (Debian's python3-distributed) only when it talks to a cluster;
 `import ubersim` does not import it.
