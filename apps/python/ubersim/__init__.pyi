@@ -182,6 +182,9 @@ class Env:
     def world(self) -> VectorWorlds:
         """The C++ core of the one world (index 0)."""
     @property
+    def worlds(self) -> VectorWorlds:
+        """The same C++ core (the name VectorEnv and ParallelEnv use)."""
+    @property
     def features(self) -> Tuple[str, ...]: ...
     @property
     def slots(self) -> npt.NDArray[np.int32]: ...
@@ -233,3 +236,13 @@ class ParallelEnv:
     def worlds(self) -> VectorWorlds: ...
     @property
     def features(self) -> Tuple[str, ...]: ...
+    @property
+    def slots(self) -> npt.NDArray[np.int32]:
+        """Each robot row's (team, id) in the field's order (the views reorder them)."""
+    @property
+    def controlled_rows(self) -> npt.NDArray[np.int32]:
+        """The robot rows of the agents, in possible_agents' order."""
+    @property
+    def field(self) -> Dict[str, Any]: ...
+    @property
+    def dt(self) -> float: ...

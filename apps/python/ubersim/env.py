@@ -185,7 +185,41 @@ class _Worlds:
         return render_field(self.field, self.slots, pose, rows[:, f["present"]] > 0.5, ball, width=width)
 
 
-class VectorEnv(VectorEnvBase):
+class _WorldsView:
+    """What every env here tells of its worlds (self._w, a _Worlds)."""
+
+    @property
+    def worlds(self):
+        """The C++ core: state_hash(k), save(k), restore(k, bytes), time(k), profile, physics_steps."""
+        return self._w.core
+
+    @property
+    def features(self):
+        """The names of the observation's features, in order."""
+        return self._w.features
+
+    @property
+    def slots(self):
+        """Each robot row's (team, id): team 0 blue, 1 yellow."""
+        return self._w.slots
+
+    @property
+    def controlled_rows(self):
+        """The robot rows the actions move, in the actions' order."""
+        return self._w.controlled
+
+    @property
+    def field(self):
+        """The field's geometry (m): sizes and markings."""
+        return self._w.field
+
+    @property
+    def dt(self):
+        """Simulated seconds per env step (frame_skip physics steps)."""
+        return self._w.dt
+
+
+class VectorEnv(_WorldsView, VectorEnvBase):
     """K worlds of one world file, stepped by one call into C++ (gymnasium's VectorEnv API).
 
     controlled: 'blue', 'yellow' or 'both' (the actions move that team's robots, or both's);
@@ -222,36 +256,6 @@ class VectorEnv(VectorEnvBase):
                                 dtype=np.float32)
         self._w.seed(seed)
         self._closed = False
-
-    @property
-    def worlds(self):
-        """The C++ core (state_hash(k), save(k), restore(k, bytes), time(k), slots, field, profile)."""
-        return self._w.core
-
-    @property
-    def features(self):
-        """The names of the observation's features, in order."""
-        return self._w.features
-
-    @property
-    def slots(self):
-        """Each robot row's (team, id): team 0 blue, 1 yellow."""
-        return self._w.slots
-
-    @property
-    def controlled_rows(self):
-        """The robot rows the actions move, in the actions' order."""
-        return self._w.controlled
-
-    @property
-    def field(self):
-        """The field's geometry (m): sizes and markings."""
-        return self._w.field
-
-    @property
-    def dt(self):
-        """Simulated seconds per env step (frame_skip physics steps)."""
-        return self._w.dt
 
     def reset(self, *, seed=None, options=None):
         """Starts a new episode in every world; seed: an int (world k gets seed + k) or one per world."""
@@ -294,7 +298,7 @@ class VectorEnv(VectorEnvBase):
         return self
 
 
-class Env(EnvBase):
+class Env(_WorldsView, EnvBase):
     """One world in gymnasium's Env API: the same options as VectorEnv, no auto-reset."""
 
     metadata = {"render_modes": ["rgb_array"]}
@@ -314,12 +318,6 @@ class Env(EnvBase):
         self.observation_space = Box(low, high, dtype=np.float32)
         self.action_space = Box(self._w.action_low, self._w.action_high, dtype=np.float32)
         self._w.seed(seed)
-
-    features = VectorEnv.features
-    slots = VectorEnv.slots
-    field = VectorEnv.field
-    dt = VectorEnv.dt
-    controlled_rows = VectorEnv.controlled_rows
 
     @property
     def world(self):
@@ -353,7 +351,7 @@ class Env(EnvBase):
         return self
 
 
-class ParallelEnv:
+class ParallelEnv(_WorldsView):
     """Every robot of both teams an agent, over K worlds (PettingZoo's parallel API, batched).
 
     Agents are named 'blue_0' … 'yellow_10'. Each value of the observation, reward, termination
@@ -404,16 +402,6 @@ class ParallelEnv:
     @property
     def max_num_agents(self):
         return len(self.possible_agents)
-
-    @property
-    def worlds(self):
-        """The C++ core (state_hash(k), save(k), restore(k, bytes), time(k))."""
-        return self._w.core
-
-    @property
-    def features(self):
-        """The names of the observation's features, in order."""
-        return self._w.features
 
     def observation_space(self, agent):
         """One world's observation of `agent`: robots × features."""

@@ -38,6 +38,13 @@ class Task:
         return np.zeros(len(obs)), np.zeros(len(obs), bool)
 
     # Helpers for the shipped tasks.
+    def _per_world(self, k, **dtypes):
+        """Per-world state arrays as attributes (`_name`), made again when the number of worlds changes."""
+        for name, dtype in dtypes.items():
+            current = getattr(self, "_" + name, None)
+            if current is None or len(current) != k:
+                setattr(self, "_" + name, np.zeros(k, dtype))
+
     @staticmethod
     def _rows(env, team):
         return np.flatnonzero(env.slots[:, 0] == team)
@@ -73,8 +80,6 @@ class GoToBall(Task):
     def __init__(self, hold_steps=10, margin=0.3):
         self.hold_steps = hold_steps
         self.margin = margin
-        self._distance = None
-        self._held = None
 
     def start(self, rng, indices, env):
         n = len(indices)
@@ -102,10 +107,7 @@ class GoToBall(Task):
         return np.hypot(r[:, _F["x"]] - r[:, _F["ball_x"]], r[:, _F["y"]] - r[:, _F["ball_y"]])
 
     def begin(self, obs, indices, env):
-        k = obs.shape[0]
-        if self._distance is None or len(self._distance) != k:
-            self._distance = np.zeros(k)
-            self._held = np.zeros(k, np.int64)
+        self._per_world(obs.shape[0], distance=np.float64, held=np.int64)
         self._distance[indices] = self._robot_ball_distance(obs, env)[indices]
         self._held[indices] = 0
 
@@ -131,8 +133,6 @@ class EmptyGoal(Task):
 
     def __init__(self, margin=0.3):
         self.margin = margin
-        self._ball_to_goal = None
-        self._robot_to_ball = None
 
     def _place_defenders(self, rng, s, env, n):
         """EmptyGoal has none; StaticDefenders puts its defenders here."""
@@ -160,9 +160,7 @@ class EmptyGoal(Task):
         return ball_to_goal, robot_to_ball
 
     def begin(self, obs, indices, env):
-        k = obs.shape[0]
-        if self._ball_to_goal is None or len(self._ball_to_goal) != k:
-            self._ball_to_goal, self._robot_to_ball = np.zeros(k), np.zeros(k)
+        self._per_world(obs.shape[0], ball_to_goal=np.float64, robot_to_ball=np.float64)
         ball_to_goal, robot_to_ball = self._distances(obs, env)
         self._ball_to_goal[indices] = ball_to_goal[indices]
         self._robot_to_ball[indices] = robot_to_ball[indices]
@@ -213,8 +211,6 @@ class Pass(Task):
     def __init__(self, distance=(1.5, 3.0), idle_steps=80):
         self.distance = distance
         self.idle_steps = idle_steps
-        self._holder = None
-        self._idle = None
 
     def start(self, rng, indices, env):
         n = len(indices)
@@ -236,9 +232,7 @@ class Pass(Task):
         return s
 
     def begin(self, obs, indices, env):
-        k = obs.shape[0]
-        if self._holder is None or len(self._holder) != k:
-            self._holder, self._idle = np.zeros(k, np.int64), np.zeros(k, np.int64)
+        self._per_world(obs.shape[0], holder=np.int64, idle=np.int64)
         self._holder[indices] = 0  # robot a has the ball
         self._idle[indices] = 0
 
@@ -250,6 +244,5 @@ class Pass(Task):
         self._holder = np.where(at_a, 0, np.where(at_b, 1, self._holder))
         speed = np.hypot(obs[:, 0, _F["ball_vx"]], obs[:, 0, _F["ball_vy"]])
         self._idle = np.where((speed < 0.05) & ~at_a & ~at_b, self._idle + 1, 0)
-        _, _, out = self._ball_events(obs, env.field)
-        goal, own_goal, _ = self._ball_events(obs, env.field)
+        goal, own_goal, out = self._ball_events(obs, env.field)
         return received.astype(np.float64), out | goal | own_goal | (self._idle >= self.idle_steps)
