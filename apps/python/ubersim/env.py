@@ -48,12 +48,18 @@ _TURNED = ("x", "y", "cos_yaw", "sin_yaw", "vx", "vy", "ball_x", "ball_y", "ball
 _MASK64 = (1 << 64) - 1
 
 
+def _episode_seeds(world_seeds, episodes):
+    """A seed per world and episode (splitmix64 of the two, vectorised): episodes differ, runs repeat."""
+    z = np.asarray(world_seeds, np.uint64) * np.uint64(0x9E3779B97F4A7C15)  # wraps modulo 2^64, as meant
+    z = z + np.asarray(episodes, np.uint64) + np.uint64(0x632BE59BD9B4E019)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
 def _episode_seed(world_seed, episode):
-    """A seed per world and episode (splitmix64 of the two): episodes differ, runs repeat."""
-    z = (int(world_seed) * 0x9E3779B97F4A7C15 + int(episode) + 0x632BE59BD9B4E019) & _MASK64
-    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
-    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & _MASK64
-    return z ^ (z >> 31)
+    """The seed of one world's episode (_episode_seeds of one)."""
+    return int(_episode_seeds([world_seed], [episode])[0])
 
 
 def _drivers(controlled, opponent):
@@ -132,7 +138,7 @@ class _Worlds:
     def reset(self, indices):
         """Starts the next episode of the worlds `indices` (the task's start, or the world file's)."""
         indices = np.asarray(indices, np.int64)
-        seeds = [_episode_seed(self.world_seeds[k], self.episodes[k]) for k in indices]
+        seeds = _episode_seeds(self.world_seeds[indices], self.episodes[indices]).tolist()
         start = self.task.start(self.rng, indices, self) if hasattr(self.task, "start") else None
         if start is None:
             self.core.reset(indices.tolist(), seeds, self.obs)
