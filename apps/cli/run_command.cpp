@@ -75,7 +75,7 @@ po::options_description RunOptionsOf(RunFlags& f) {
       ("local-only", "keep every transport on loopback (127.0.0.1): nothing sent to or reachable from another machine")
       ("realism", po::value<std::string>(&f.overrides.realism),
        "vision and radio preset: ÜberSim's ideal, 2003, realistic, or the league's None, Friendly, RC2021, Realistic "
-       "(what it asks for that is not modelled is listed at start)")
+       "(every RealismConfigErForce field exactly; docs/interfaces.md)")
       ("field,g", po::value<std::string>(&f.overrides.field),
        "field: div-a or div-b (also ER-Force's 2020, 2023, 2023B); the formation scales with it")
       ("vision-address", po::value<std::string>(&f.overrides.vision_address), "SSL-Vision multicast group (default 224.5.23.2)")

@@ -114,23 +114,17 @@ std::vector<std::string> ApplyRunOverrides(const RunOverrides& o, WorldModel& wo
   if (o.local_only) world.local_only = true;
   if (!o.field.empty()) UseField(o.field, world, loader);
   if (!o.realism.empty()) {
-    std::vector<std::string> unmodelled;
     PerceptionModel preset;
     RadioModel radio = world.radio;
     if (PerceptionPreset(o.realism, preset) && RadioPreset(o.realism, radio)) {
       // ÜberSim's own: its noise, drop-outs, latency and frame rate; the world's cameras stay.
       preset.cameras = world.perception.cameras;
       world.perception = preset;
-    } else if (!LeagueRealismPreset(o.realism, world.perception, radio, unmodelled)) {
+    } else if (!LeagueRealismPreset(o.realism, world.perception, radio, world.held_ball)) {
       throw OverrideError("--realism " + o.realism + ": no such preset (ÜberSim's: ideal, 2003, realistic; the league's: " +
                           LeagueRealismPresetNames() + ")");
     }
     world.radio = radio;
-    if (!unmodelled.empty()) {
-      std::string line = "realism " + o.realism + ": not modelled, left out:";
-      for (const std::string& u : unmodelled) line += "\n  - " + u;
-      notes.push_back(line);
-    }
   }
   for (const auto& entry : o.ports) {
     const std::string& flag = entry.first;

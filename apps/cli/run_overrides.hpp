@@ -36,7 +36,7 @@ struct RunOverrides {
 };
 
 /// Applies `overrides` to `world` (transport parameters checked against their plugins' schemas);
-/// returns the lines to print once at start (what a realism preset asks for that is not modelled).
+/// returns the lines to print once at start (notes on what the overrides changed).
 /// Throws OverrideError or ModelError.
 std::vector<std::string> ApplyRunOverrides(const RunOverrides& overrides, WorldModel& world,
                                            const ModelLoader& loader, PluginRegistry& registry);

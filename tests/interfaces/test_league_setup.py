@@ -7,6 +7,7 @@ robot_specs with ER-Force's custom spec under a bare type URL, a client clearing
 Loopback only (--local-only): a test outside a network namespace of its own never opens the LAN.
 """
 import json
+import math
 import os
 import statistics
 import time
@@ -120,20 +121,47 @@ class VisionPort(unittest.TestCase):
 
 
 class Realism(unittest.TestCase):
-    def test_rc2021_gives_the_presets_noise_and_latency_through_the_wire(self):
+    def test_rc2021_gives_the_presets_noise_latency_and_losses_through_the_wire(self):
         s = Shipped("--realism", "RC2021")
         self.addCleanup(s.close)
         frames = s.detections(200)
-        latency = [d.t_sent - d.t_capture for d in frames]
-        self.assertAlmostEqual(statistics.median(latency), 0.035, delta=0.002)
+        # The frames leave 35 ms (vision_delay) after the capture, stamped with RC2021's 10 ms
+        # vision_processing_time as t_sent - t_capture, as ER-Force's simulator stamps them.
+        stamped = [d.t_sent - d.t_capture for d in frames]
+        self.assertAlmostEqual(statistics.median(stamped), 0.010, delta=0.002)
         # A robot standing still: its reported x scatters with RC2021's σ of 1.3 mm.
         xs = [r.x for d in frames for r in d.robots_yellow if r.robot_id == 3]
         self.assertGreater(len(xs), 100)
         self.assertGreater(statistics.stdev(xs), 0.9)
         self.assertLess(statistics.stdev(xs), 1.8)
+        # The ball's blob area is reported, with RC2021's 6.5 px of noise on it.
+        areas = [b.area for d in frames for b in d.balls if abs(b.x) < 100 and abs(b.y) < 100]
+        self.assertGreater(len(areas), 100)
+        self.assertTrue(all(b.HasField("area") for d in frames for b in d.balls))
+        self.assertGreater(statistics.pstdev(areas), 2.0, areas[:20])
+        # Every field of the preset is modelled: nothing is listed as left out.
         out = s.sim.output()
-        self.assertEqual(out.count("realism RC2021: not modelled"), 1, out)
-        self.assertIn("enable_invisible_ball", out)
+        self.assertNotIn("not modelled", out)
+        self.assertNotIn("left out", out)
+        # RC2021's robot_response_loss 0.1: about one robot's answer in ten is left out.
+        rc = robot_pb.RobotControl()
+        for rid in range(6):
+            rc.robot_commands.add(id=rid, dribbler_speed=0.0)
+        answered = commanded = 0
+        with harness.UdpClient() as team:
+            for _ in range(100):
+                team.send(rc, s.yellow)
+                reply = team.recv(10.0)
+                self.assertIsNotNone(reply)
+                response = feedback_pb.RobotControlResponse()
+                response.ParseFromString(reply[0])
+                self.assertEqual([e.code for e in response.errors], [])
+                commanded += len(rc.robot_commands)
+                answered += len(response.feedback)
+                time.sleep(0.005)  # a few steps apart: each step draws its losses anew
+        lost = 1.0 - answered / commanded
+        self.assertGreater(lost, 0.03, (answered, commanded))
+        self.assertLess(lost, 0.2, (answered, commanded))
 
     def test_none_has_no_noise(self):
         s = Shipped("--realism", "None")
@@ -170,6 +198,31 @@ class RobotsAsInAMatch(unittest.TestCase):
         self.assertEqual(len(seen), 12)
         for (team, rid), (x, _) in seen.items():
             self.assertAlmostEqual(abs(x), 4000, delta=60, msg=(team, rid))
+
+    def test_a_clients_camera_position_error_moves_the_cameras_the_geometry_reports(self):
+        def realism(**fields):
+            cmd = control_pb.SimulatorCommand()
+            cmd.config.realism_config.custom.add().Pack(erforce_pb.RealismConfigErForce(**fields))
+            return cmd
+
+        def cameras(packet):
+            return {c.camera_id: (c.derived_camera_world_tx, c.derived_camera_world_ty, c.derived_camera_world_tz)
+                    for c in packet.geometry.calib}
+
+        true = cameras(self.s.receiver.recv_until(lambda p: p.HasField("geometry"), 10.0, parse))
+        self.assertTrue(true)
+        self.addCleanup(lambda: self.s.command(realism(camera_position_error=0.0)))
+        self.assertEqual(self.s.command(realism(camera_position_error=0.1))[0], [])
+        # The geometry goes out again at once, each camera 100 mm off along (0.3, 0.7, 0.05).
+        norm = math.sqrt(0.3 ** 2 + 0.7 ** 2 + 0.05 ** 2)
+        want = {i: (x + 100 * 0.3 / norm, y + 100 * 0.7 / norm, z + 100 * 0.05 / norm) for i, (x, y, z) in true.items()}
+
+        def moved(packet):
+            got = cameras(packet) if packet.HasField("geometry") else {}
+            return got.keys() == want.keys() and all(
+                abs(a - b) < 0.5 for i in got for a, b in zip(got[i], want[i]))
+
+        self.s.receiver.recv_until(moved, 10.0, parse)
 
     def feedback(self, rid):
         """A RobotControl for yellow `rid` (a dribbler command): (error codes, ids with feedback)."""

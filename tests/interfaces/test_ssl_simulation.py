@@ -560,12 +560,36 @@ class UdpWithSyncObserver(unittest.TestCase):
         noisy = balls(self.sync.step(0.3))
         spread = max(b[1] for b in noisy) - min(b[1] for b in noisy)
         self.assertGreater(spread, 0.05)
-        # What the kernel cannot model is named, and the rest still applies.
-        got = control(self.sim, realism_command(vision_delay=30000000, stddev_ball_area=6.5))
-        self.assertEqual(codes(got), ["UBERSIM_UNSUPPORTED_REALISM_FIELDS"])
-        self.assertIn("stddev_ball_area", got.errors[0].message)
+        # Every field applies, none is refused as unsupported: the processing time is what the
+        # frames stamp as t_sent - t_capture, and the ball's blob area carries its noise.
+        got = control(self.sim, realism_command(vision_delay=30000000, vision_processing_time=8000000,
+                                                stddev_ball_area=0.0))
+        self.assertEqual(codes(got), [])
+        self.sync.step(0.1)
         r = self.sync.step(0.3)
-        self.assertAlmostEqual(r.detection[-1].t_sent - r.detection[-1].t_capture, 0.030, delta=1e-6)
+        self.assertAlmostEqual(r.detection[-1].t_sent - r.detection[-1].t_capture, 0.008, delta=1e-6)
+        quiet_areas = {b.area for f in r.detection for b in f.balls}
+        self.assertEqual(len(quiet_areas), 1, quiet_areas)  # a resting ball: one blob size
+        self.assertGreater(min(quiet_areas), 0)
+        self.assertEqual(codes(control(self.sim, realism_command(stddev_ball_area=6.5))), [])
+        self.sync.step(0.1)
+        noisy_areas = [b.area for f in self.sync.step(0.3).detection for b in f.balls]
+        self.assertGreater(len(set(noisy_areas)), 3, noisy_areas)
+
+    def test_lost_feedback_leaves_the_robot_out_of_the_response(self):
+        rc = robot_pb.RobotControl()
+        move_local(rc, 2)
+        self.sync.step(0.01)
+        self.assertEqual([f.id for f in robot_control(self.sim, self.sim.blue_port, rc).feedback], [2])
+        # robot_response_loss 1: every robot's answer is lost, the response still comes.
+        self.assertEqual(codes(control(self.sim, realism_command(robot_response_loss=1.0))), [])
+        self.sync.step(0.01)
+        r = robot_control(self.sim, self.sim.blue_port, rc)
+        self.assertEqual(codes(r), [])
+        self.assertEqual(list(r.feedback), [])
+        self.assertEqual(codes(control(self.sim, realism_command(robot_response_loss=0.0))), [])
+        self.sync.step(0.01)
+        self.assertEqual([f.id for f in robot_control(self.sim, self.sim.blue_port, rc).feedback], [2])
 
 
 if __name__ == "__main__":

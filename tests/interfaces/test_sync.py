@@ -145,7 +145,7 @@ class SyncMode(unittest.TestCase):
         self.assertTrue(self.client.step(0.05).detection)  # still served
 
     def test_framing_errors_close_only_that_connection(self):
-        self.assertTrue(self.client.step(0.05).detection)
+        self.assertTrue(self.client.step(0.1).detection)  # a fresh world: its cameras free-running, the first frame leaves after the 35 ms latency
         cases = {
             "varint too long": b"\xff" * 6 + b"\x01",
             "larger than the limit": sslsim.encode_varint(10 ** 6) + b"\x00" * 64,

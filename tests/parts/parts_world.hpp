@@ -29,8 +29,10 @@ struct PartsWorld {
   std::shared_ptr<const RobotModel> robot_model;
   std::unique_ptr<World> world;
 
-  // `profile`: "precise" or "fast" (PhysicsProfileNames), over the world file's own.
-  explicit PartsWorld(const std::string& profile, const std::string& robot_file = kModernRobot) {
+  // `profile`: "precise" or "fast" (PhysicsProfileNames), over the world file's own; `held_ball`:
+  // the world's dribblers hold the ball by a constraint (`dribbling: held`).
+  explicit PartsWorld(const std::string& profile, const std::string& robot_file = kModernRobot,
+                      bool held_ball = false) {
     const ModelLoader loader(ModelLoader::DefaultSchemaDir(),
                              [this](PluginKind k, const std::string& id) {
                                return registry.Find(k, id).schema_json;
@@ -43,6 +45,7 @@ struct PartsWorld {
     model.robots.push_back(RobotPlacement{kRobot, loader.LoadRobot(robot_file), -2.0, 0.0, 0.0, true});
     robot_model = model.robots.back().model;
     model.ball_start = Vec3(3.5, 2.5, 0);  // out of the way until a test places it
+    model.held_ball = held_ball;
     world = std::make_unique<World>(model, registry, log, false);
   }
 

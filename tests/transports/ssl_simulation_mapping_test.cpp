@@ -2,8 +2,11 @@
 // The ssl_simulation transport's protocol mapping, framing and simulation-thread bridge, without
 // sockets: wire messages in, events and SimulatorErrors out, in the units the kernel uses.
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -266,61 +269,127 @@ SimulatorCommand WithRealism(const RealismConfigErForce& r, const std::string& u
   return c;
 }
 
-TEST(SslSimulationMapping, RealismErForceWithOrWithoutPackage) {
+TEST(SslSimulationMapping, RealismErForceEveryFieldReachesItsEvent) {
+  // Fields 1–18 of RealismConfigErForce (reference/ssl-protocols.md §6.1), each set.
   RealismConfigErForce r;
-  r.set_stddev_ball_p(0.002f);
-  r.set_stddev_robot_p(0.003f);
-  r.set_stddev_robot_phi(0.01f);
-  r.set_missing_ball_detections(0.05f);
-  r.set_missing_robot_detections(0.02f);
-  r.set_camera_overlap(0.5f);
-  r.set_vision_delay(35000000);
-  r.set_robot_command_loss(0.03f);
-  r.set_command_delay(3000000);
+  r.set_stddev_ball_p(0.002f);               // 1
+  r.set_stddev_robot_p(0.003f);              // 2
+  r.set_stddev_robot_phi(0.01f);             // 3
+  r.set_stddev_ball_area(6.5f);              // 4
+  r.set_enable_invisible_ball(true);         // 5
+  r.set_ball_visibility_threshold(0.4f);     // 6
+  r.set_camera_overlap(0.5f);                // 7
+  r.set_dribbler_ball_detections(0.05f);     // 8
+  r.set_camera_position_error(0.1f);         // 9
+  r.set_robot_command_loss(0.03f);           // 10
+  r.set_robot_response_loss(0.1f);           // 11
+  r.set_missing_ball_detections(0.05f);      // 12
+  r.set_vision_delay(35000000);              // 13
+  r.set_vision_processing_time(10000000);    // 14
+  r.set_simulate_dribbling(false);           // 15
+  r.set_object_position_offset(0.02f);       // 16
+  r.set_missing_robot_detections(0.02f);     // 17
+  r.set_command_delay(3000000);              // 18
   for (const char* url : {"type.googleapis.com/RealismConfigErForce", "type.googleapis.com/sslsim.RealismConfigErForce"}) {
     const Mapped m = MapSimulatorCommand(WithRealism(r, url), SixEach, kOptions);
-    EXPECT_TRUE(m.errors.empty()) << url;
+    EXPECT_TRUE(m.errors.empty()) << url;  // nothing is left out as unsupported
     ASSERT_EQ(m.events.size(), 1u) << url;
     const auto& e = As<RealismEvent>(m.events[0]);
-    EXPECT_NEAR(*e.ball_position_noise, 0.002, 1e-9);
-    EXPECT_NEAR(*e.robot_position_noise, 0.003, 1e-9);
-    EXPECT_NEAR(*e.robot_orientation_noise, 0.01, 1e-9);
-    EXPECT_NEAR(*e.ball_drop, 0.05, 1e-9);
-    EXPECT_NEAR(*e.robot_drop, 0.02, 1e-9);
-    EXPECT_NEAR(*e.camera_overlap, 0.5, 1e-9);
-    EXPECT_DOUBLE_EQ(*e.vision_latency, 0.035);  // ns → s
+    ASSERT_TRUE(e.ball_position_noise && e.robot_position_noise && e.robot_orientation_noise && e.ball_area_noise &&
+                e.ball_occlusion && e.ball_visibility_threshold && e.camera_overlap && e.dribbler_false_balls &&
+                e.camera_position_error && e.radio_loss && e.radio_response_loss && e.ball_drop &&
+                e.vision_latency && e.processing_time && e.held_ball && e.object_offset && e.robot_drop &&
+                e.radio_latency);
+    EXPECT_NEAR(*e.ball_position_noise, 0.002, 1e-9);        // m
+    EXPECT_NEAR(*e.robot_position_noise, 0.003, 1e-9);       // m
+    EXPECT_NEAR(*e.robot_orientation_noise, 0.01, 1e-9);     // rad
+    EXPECT_NEAR(*e.ball_area_noise, 6.5, 1e-9);              // px
+    EXPECT_TRUE(*e.ball_occlusion);
+    EXPECT_NEAR(*e.ball_visibility_threshold, 0.4, 1e-7);
+    EXPECT_NEAR(*e.camera_overlap, 0.5, 1e-9);               // m
+    EXPECT_NEAR(*e.dribbler_false_balls, 0.05, 1e-9);        // 1/s per robot
+    EXPECT_NEAR(*e.camera_position_error, 0.1, 1e-7);        // m
     EXPECT_NEAR(*e.radio_loss, 0.03, 1e-9);
-    EXPECT_DOUBLE_EQ(*e.radio_latency, 0.003);
+    EXPECT_NEAR(*e.radio_response_loss, 0.1, 1e-7);
+    EXPECT_NEAR(*e.ball_drop, 0.05, 1e-9);
+    EXPECT_DOUBLE_EQ(*e.vision_latency, 0.035);              // ns → s
+    EXPECT_DOUBLE_EQ(*e.processing_time, 0.010);             // ns → s
+    EXPECT_TRUE(*e.held_ball);                               // simulate_dribbling false: held
+    EXPECT_NEAR(*e.object_offset, 0.02, 1e-9);               // m
+    EXPECT_NEAR(*e.robot_drop, 0.02, 1e-9);
+    EXPECT_DOUBLE_EQ(*e.radio_latency, 0.003);               // ns → s
   }
 }
 
-TEST(SslSimulationMapping, RealismListsWhatItCannotApply) {
+TEST(SslSimulationMapping, RealismSetsOnlyTheFieldsItHas) {
+  RealismConfigErForce r;
+  r.set_simulate_dribbling(true);  // physical dribbling: the ball is not held
+  r.set_enable_invisible_ball(false);
+  Mapped m = MapSimulatorCommand(WithRealism(r, "RealismConfigErForce"), SixEach, kOptions);
+  ASSERT_TRUE(m.errors.empty());
+  ASSERT_EQ(m.events.size(), 1u);
+  {
+    const auto& e = As<RealismEvent>(m.events[0]);
+    ASSERT_TRUE(e.held_ball && e.ball_occlusion);
+    EXPECT_FALSE(*e.held_ball);
+    EXPECT_FALSE(*e.ball_occlusion);
+    EXPECT_FALSE(e.vision_latency || e.processing_time || e.ball_area_noise || e.radio_response_loss ||
+                 e.ball_visibility_threshold || e.camera_position_error || e.object_offset ||
+                 e.dribbler_false_balls);
+  }
+  // Zeros are values too: they switch a setting off.
+  RealismConfigErForce zeros;
+  zeros.set_stddev_ball_area(0.0f);
+  zeros.set_vision_processing_time(0);
+  m = MapSimulatorCommand(WithRealism(zeros, "RealismConfigErForce"), SixEach, kOptions);
+  ASSERT_TRUE(m.errors.empty());
+  ASSERT_EQ(m.events.size(), 1u);
+  {
+    const auto& e = As<RealismEvent>(m.events[0]);
+    ASSERT_TRUE(e.ball_area_noise && e.processing_time);
+    EXPECT_EQ(*e.ball_area_noise, 0.0);
+    EXPECT_EQ(*e.processing_time, 0.0);
+  }
+  // An empty message asks for nothing.
+  m = MapSimulatorCommand(WithRealism(RealismConfigErForce{}, "RealismConfigErForce"), SixEach, kOptions);
+  EXPECT_TRUE(m.errors.empty());
+  EXPECT_TRUE(m.events.empty());
+}
+
+TEST(SslSimulationMapping, RealismRefusesAWholeMessageWithAnInvalidValue) {
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<std::pair<const char*, std::function<void(RealismConfigErForce&)>>> bad = {
+      {"stddev_ball_p", [&](auto& r) { r.set_stddev_ball_p(-0.001f); }},
+      {"stddev_ball_area", [&](auto& r) { r.set_stddev_ball_area(-1.0f); }},
+      {"stddev_ball_area", [&](auto& r) { r.set_stddev_ball_area(nan); }},
+      {"ball_visibility_threshold", [&](auto& r) { r.set_ball_visibility_threshold(1.5f); }},
+      {"dribbler_ball_detections", [&](auto& r) { r.set_dribbler_ball_detections(-0.1f); }},
+      {"camera_position_error", [&](auto& r) { r.set_camera_position_error(inf); }},
+      {"robot_response_loss", [&](auto& r) { r.set_robot_response_loss(1.01f); }},
+      {"robot_response_loss", [&](auto& r) { r.set_robot_response_loss(-0.1f); }},
+      {"missing_ball_detections", [&](auto& r) { r.set_missing_ball_detections(1.5f); }},
+      {"vision_delay", [&](auto& r) { r.set_vision_delay(-5); }},
+      {"vision_processing_time", [&](auto& r) { r.set_vision_processing_time(11'000'000'000); }},
+      {"vision_processing_time", [&](auto& r) { r.set_vision_processing_time(-1); }},
+      {"object_position_offset", [&](auto& r) { r.set_object_position_offset(-0.02f); }},
+      {"command_delay", [&](auto& r) { r.set_command_delay(20'000'000'000u); }},
+  };
+  for (const auto& [name, spoil] : bad) {
+    RealismConfigErForce r;
+    r.set_vision_delay(20000000);  // valid, but not applied beside an invalid value
+    r.set_stddev_ball_area(6.5f);
+    spoil(r);
+    const Mapped m = MapSimulatorCommand(WithRealism(r, "RealismConfigErForce"), SixEach, kOptions);
+    EXPECT_TRUE(m.events.empty()) << name;
+    ASSERT_EQ(m.errors.size(), 1u) << name;
+    EXPECT_EQ(m.errors[0].code, codes::kInvalidValue) << name;
+    EXPECT_NE(m.errors[0].message.find(name), std::string::npos) << m.errors[0].message;
+    EXPECT_FALSE(HasCode(m.errors, codes::kRealismFields)) << name;
+  }
+
   RealismConfigErForce r;
   r.set_vision_delay(20000000);
-  r.set_stddev_ball_area(6.5f);
-  r.set_enable_invisible_ball(true);
-  r.set_simulate_dribbling(true);       // what we do anyway: not listed
-  r.set_object_position_offset(0.0f);   // likewise
-  const Mapped m = MapSimulatorCommand(WithRealism(r, "RealismConfigErForce"), SixEach, kOptions);
-  ASSERT_EQ(m.events.size(), 1u);  // vision_delay still applies
-  ASSERT_EQ(m.errors.size(), 1u);
-  EXPECT_EQ(m.errors[0].code, codes::kRealismFields);
-  EXPECT_NE(m.errors[0].message.find("stddev_ball_area"), std::string::npos);
-  EXPECT_NE(m.errors[0].message.find("enable_invisible_ball"), std::string::npos);
-  EXPECT_EQ(m.errors[0].message.find("simulate_dribbling"), std::string::npos);
-  EXPECT_EQ(m.errors[0].message.find("object_position_offset"), std::string::npos);
-
-  RealismConfigErForce bad;
-  bad.set_missing_ball_detections(1.5f);
-  Mapped mb = MapSimulatorCommand(WithRealism(bad, "RealismConfigErForce"), SixEach, kOptions);
-  EXPECT_TRUE(mb.events.empty());
-  EXPECT_TRUE(HasCode(mb.errors, codes::kInvalidValue));
-  bad.set_missing_ball_detections(0.1f);
-  bad.set_vision_delay(-5);
-  mb = MapSimulatorCommand(WithRealism(bad, "RealismConfigErForce"), SixEach, kOptions);
-  EXPECT_TRUE(mb.events.empty());
-  EXPECT_TRUE(HasCode(mb.errors, codes::kInvalidValue));
-
   SimulatorCommand garbled = WithRealism(r, "RealismConfigErForce");
   garbled.mutable_config()->mutable_realism_config()->mutable_custom(0)->set_value("\xff\xff\xff");
   EXPECT_TRUE(HasCode(MapSimulatorCommand(garbled, SixEach, kOptions).errors, codes::kUnreadable));
@@ -579,13 +648,33 @@ TEST(SslSimulationMapping, ParseMessageKinds) {
   EXPECT_EQ(As<CommandEvent>(m.events[0]).robot.id, 2);
 }
 
+TEST(SslSimulationMapping, ResponseLeavesOutRobotsWhoseFeedbackTheRadioLost) {
+  auto report = [](const RobotId& id) -> std::optional<RobotReport> {
+    if (SixEach(id) != Presence::kOnField) return std::nullopt;
+    RobotReport r;
+    r.feedback_lost = id.id == 1 || id.id == 4;  // robot_response_loss drew these
+    return r;
+  };
+  const RobotControlResponse r = BuildRobotControlResponse({0, 1, 3, 4}, Team::kYellow, report, {});
+  ASSERT_EQ(r.feedback_size(), 2);
+  EXPECT_EQ(r.feedback(0).id(), 0u);
+  EXPECT_EQ(r.feedback(1).id(), 3u);
+  EXPECT_EQ(r.errors_size(), 0);  // a lost answer is silence, not an error
+  // Every answer lost: the response still comes (it carries the errors), with no feedback.
+  const RobotControlResponse none = BuildRobotControlResponse(
+      {1, 4}, Team::kYellow, report, {WireError{codes::kUnknownRobot, "no robot yellow 9"}});
+  EXPECT_EQ(none.feedback_size(), 0);
+  EXPECT_EQ(none.errors_size(), 1);
+}
+
 TEST(SslSimulationMapping, DetectionFrameInMillimetres) {
   VisionFrame f;
   f.camera_id = 1;
   f.frame_number = 42;
   f.t_capture_ns = 1'500'000'000;
   f.t_sent_ns = 1'535'000'000;
-  f.balls.push_back(DetectedBall{0.25, -1.0, 0.0, 0.9});
+  f.balls.push_back(DetectedBall{0.25, -1.0, 0.0, 0.9, 118.6});
+  f.balls.push_back(DetectedBall{0.5, 0.5, 0.0, 1.0, 0.4});
   f.robots.push_back(DetectedRobot{RobotId{Team::kBlue, 3}, 1.0, 2.0, 0.5, 1.0});
   f.robots.push_back(DetectedRobot{RobotId{Team::kYellow, 5}, -1.0, 0.0, -3.0, 1.0});
   const SSL_DetectionFrame d = ToDetectionFrame(f);
@@ -594,9 +683,12 @@ TEST(SslSimulationMapping, DetectionFrameInMillimetres) {
   EXPECT_EQ(d.frame_number(), 42u);
   EXPECT_DOUBLE_EQ(d.t_capture(), 1.5);
   EXPECT_DOUBLE_EQ(d.t_sent(), 1.535);
-  ASSERT_EQ(d.balls_size(), 1);
+  ASSERT_EQ(d.balls_size(), 2);
   EXPECT_FLOAT_EQ(d.balls(0).x(), 250.0f);
   EXPECT_FLOAT_EQ(d.balls(0).y(), -1000.0f);
+  ASSERT_TRUE(d.balls(0).has_area());
+  EXPECT_EQ(d.balls(0).area(), 119u);  // the blob's area, whole pixels
+  EXPECT_EQ(d.balls(1).area(), 0u);
   ASSERT_EQ(d.robots_blue_size(), 1);
   ASSERT_EQ(d.robots_yellow_size(), 1);
   EXPECT_EQ(d.robots_blue(0).robot_id(), 3u);
@@ -665,6 +757,14 @@ TEST(SslSimulationBridge, KnowsRobotsAndStepLength) {
   ASSERT_TRUE(b.Report(RobotId{Team::kBlue, 0}));
   EXPECT_TRUE(b.Report(RobotId{Team::kBlue, 0})->dribbler_ball_contact);
   EXPECT_FALSE(b.Report(RobotId{Team::kBlue, 0})->drive);
+  EXPECT_FALSE(b.Report(RobotId{Team::kBlue, 0})->feedback_lost);
+  // The radio's lost answers of a step reach the report, and the next step's state replaces them.
+  WorldSnapshot lost = Snap(6, true);
+  for (RobotState& r : lost.robots) r.feedback_lost = true;
+  b.OnPublish(lost);
+  EXPECT_TRUE(b.Report(RobotId{Team::kBlue, 0})->feedback_lost);
+  b.OnPublish(Snap(7, true));
+  EXPECT_FALSE(b.Report(RobotId{Team::kBlue, 0})->feedback_lost);
   EXPECT_FALSE(b.Exists(RobotId{Team::kYellow, 0}));
 }
 

@@ -19,7 +19,7 @@ TEST(VisionPackets, DetectionInMillimetresWithEveryRequiredField) {
   f.frame_number = 41;
   f.t_capture_ns = 1'000'000'000;
   f.t_sent_ns = 1'035'000'000;
-  f.balls.push_back(DetectedBall{0.5, -0.25, 0.0, 0.9});
+  f.balls.push_back(DetectedBall{0.5, -0.25, 0.0, 0.9, 6.49});
   f.robots.push_back(DetectedRobot{{Team::kYellow, 3}, 1.0, 2.0, 0.5, 1.0});
   transport::WireClock clock(transport::TimestampMode::kSim);
   const CameraInfo camera{2, Vec3(1.0, 2.0, 6.0)};
@@ -35,6 +35,8 @@ TEST(VisionPackets, DetectionInMillimetresWithEveryRequiredField) {
   EXPECT_FLOAT_EQ(d.balls(0).y(), -250.0f);
   EXPECT_FLOAT_EQ(d.balls(0).confidence(), 0.9f);
   EXPECT_FALSE(d.balls(0).has_z());  // projected onto the carpet, as the real system reports it
+  ASSERT_TRUE(d.balls(0).has_area());
+  EXPECT_EQ(d.balls(0).area(), 6u);  // the kernel's blob area, rounded to whole pixels
   ASSERT_EQ(d.robots_yellow_size(), 1);
   EXPECT_EQ(d.robots_blue_size(), 0);
   const SSL_DetectionRobot& r = d.robots_yellow(0);

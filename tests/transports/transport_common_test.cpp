@@ -267,6 +267,11 @@ TEST(WireUnits, ConvertOnlyAtTheWire) {
   EXPECT_EQ(MetresToWholeMm(-0.0004), 0);
   EXPECT_EQ(MetresToWholeMm(1e12), std::numeric_limits<std::int32_t>::max());
   EXPECT_EQ(MetresToWholeMm(std::nan("")), 0);
+  EXPECT_EQ(WholePixels(118.6), 119u);  // a blob's area: rounded to nearest
+  EXPECT_EQ(WholePixels(0.4), 0u);
+  EXPECT_EQ(WholePixels(-3.0), 0u);
+  EXPECT_EQ(WholePixels(1e12), std::numeric_limits<std::uint32_t>::max());
+  EXPECT_EQ(WholePixels(std::nan("")), 0u);
 }
 
 TEST(WireClock, UnixStampsAreUnixTimeAtStartPlusSimTime) {

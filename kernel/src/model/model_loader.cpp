@@ -27,11 +27,8 @@ using model_detail::Describe;
 using model_detail::ErrorAt;
 using model_detail::FormatNumber;
 
-// The `perception:` block: a preset's defaults, then every key given.
-PerceptionModel LoadPerception(const ParamView& world, const FieldGeometry& field) {
-  PerceptionModel m;
-  const ParamView p = world.Has("perception") ? world["perception"] : ParamView::FromJson("{}");
-  PerceptionPreset(p.GetString("preset", "ideal"), m);  // the schema allows only known names
+// Every key of a `perception:` block `p` over `m` (a preset's values).
+void ApplyPerceptionKeys(PerceptionModel& m, const ParamView& p, const FieldGeometry& field) {
   m.frame_rate = p.GetDouble("frame_rate", m.frame_rate);
   m.latency = p.GetDouble("latency", m.latency);
   if (p.Has("noise")) {
@@ -45,11 +42,26 @@ PerceptionModel LoadPerception(const ParamView& world, const FieldGeometry& fiel
     m.robot_drop = p["drop"].GetDouble("robot", m.robot_drop);
   }
   m.camera_overlap = p.GetDouble("camera_overlap", m.camera_overlap);
+  if (p.Has("occlusion")) {
+    const ParamView o = p["occlusion"];
+    m.ball_occlusion = o.GetBool("enabled", m.ball_occlusion);
+    m.ball_visibility_threshold = o.GetDouble("visibility_threshold", m.ball_visibility_threshold);
+  }
+  if (p.Has("noise")) m.ball_area_sigma = p["noise"].GetDouble("ball_area", m.ball_area_sigma);
+  m.dribbler_false_balls = p.GetDouble("dribbler_false_balls", m.dribbler_false_balls);
+  m.camera_position_error = p.GetDouble("camera_position_error", m.camera_position_error);
+  m.object_offset = p.GetDouble("object_offset", m.object_offset);
+  if (p.Has("processing_time")) m.processing_time = p.GetDouble("processing_time", 0.0);
+  m.unsynchronised_cameras = p.GetBool("unsynchronised_cameras", m.unsynchronised_cameras);
+  m.capture_jitter = p.GetDouble("capture_jitter", m.capture_jitter);
+  if (p.Has("noise")) m.noise_growth = p["noise"].GetDouble("growth_per_metre", m.noise_growth);
+  m.exposure = p.GetDouble("exposure", m.exposure);
   if (!p.Has("cameras")) {
     m.cameras = CameraGrid(static_cast<int>(p.GetInt("camera_count", 1)), field.carpet_length,
                            field.carpet_width, p.GetDouble("camera_height", 6.0));
-    return m;
+    return;
   }
+  m.cameras.clear();
   const ParamView list = p["cameras"];
   std::map<int, int> ids;  // id -> line
   for (std::size_t i = 0; i < list.Size(); ++i) {
@@ -74,17 +86,31 @@ PerceptionModel LoadPerception(const ParamView& world, const FieldGeometry& fiel
     ids[cam.id] = id_node.Node().line;
     m.cameras.push_back(cam);
   }
-  return m;
 }
 
-// The `radio:` block: a preset's defaults, then every key given.
-RadioModel LoadRadio(const ParamView& world) {
-  RadioModel m;
-  const ParamView r = world.Has("radio") ? world["radio"] : ParamView::FromJson("{}");
-  RadioPreset(r.GetString("preset", "ideal"), m);
+// Every key of a `radio:` block `r` over `m`.
+void ApplyRadioKeys(RadioModel& m, const ParamView& r) {
   m.latency = r.GetDouble("latency", m.latency);
   m.loss = r.GetDouble("loss", m.loss);
-  return m;
+  m.response_loss = r.GetDouble("response_loss", m.response_loss);
+}
+
+ParamView BlockOf(const ParamView& world, const char* key) {
+  return world.Has(key) ? world[key] : ParamView::FromJson("{}");
+}
+
+// The `perception:` and `radio:` blocks: their presets' defaults, the league's `realism:` preset
+// over them when the world names one, then every key given.
+void LoadVisionAndRadio(const ParamView& world, WorldModel& w) {
+  const ParamView p = BlockOf(world, "perception"), r = BlockOf(world, "radio");
+  PerceptionPreset(p.GetString("preset", "ideal"), w.perception);  // the schema allows only known names
+  RadioPreset(r.GetString("preset", "ideal"), w.radio);
+  if (world.Has("realism")) {
+    LeagueRealismPreset(world.GetString("realism", "None"), w.perception, w.radio, w.held_ball);
+  }
+  ApplyPerceptionKeys(w.perception, p, w.field->geometry);
+  ApplyRadioKeys(w.radio, r);
+  if (world.Has("dribbling")) w.held_ball = world.GetString("dribbling", "physical") == "held";
 }
 
 constexpr const char* kKinds[] = {"world", "field", "ball", "robot"};
@@ -580,8 +606,7 @@ struct ModelLoader::Impl {
       }
     }
 
-    w.perception = LoadPerception(v, w.field->geometry);
-    w.radio = LoadRadio(v);
+    LoadVisionAndRadio(v, w);
     return w;
   }
 };

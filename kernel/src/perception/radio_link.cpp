@@ -60,9 +60,18 @@ void RadioLink::RestoreState(const RadioState& s) {
   RadioModel m = model_;
   m.latency = s.model.latency;
   m.loss = s.model.loss;
+  m.response_loss = s.model.response_loss;
   Configure(m);
   queue_.assign(s.queue.begin(), s.queue.end());
   rng_ = rng;
+}
+
+std::vector<bool> RadioLink::ResponsesLost(std::size_t robots) {
+  std::vector<bool> lost(robots, false);
+  if (model_.response_loss <= 0) return lost;
+  std::uniform_real_distribution<double> chance(0.0, 1.0);
+  for (std::size_t i = 0; i < robots; ++i) lost[i] = chance(rng_) < model_.response_loss;
+  return lost;
 }
 
 std::vector<CommandEvent> RadioLink::Deliver(std::int64_t now_ns) {

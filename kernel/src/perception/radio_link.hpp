@@ -26,6 +26,8 @@ class RadioLink {
   void Reset();
   /// Reset with another seed (the world reset with a new seed).
   void Reset(std::uint64_t seed);
+  /// Whether each of `robots` robots' feedback is lost this step (drawn only when some is).
+  std::vector<bool> ResponsesLost(std::size_t robots);
   /// Changes latency and loss while running.
   void Configure(const RadioModel& model);
   /// The configuration.

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "perception/vision_pipeline.hpp"
 
+#include "perception/occlusion.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -19,6 +21,13 @@ double WrapAngle(double a) {
 
 // The vision's own random stream from the world's seed (the radio's is another: radio_link.cpp).
 constexpr std::uint64_t kVisionStream = 0x5653494f4e000001ULL;
+// The cameras' frame phases: a stream of their own, so that they do not move the noise.
+constexpr std::uint64_t kPhaseStream = 0x5048415345000003ULL;
+// The camera lens's focal length in pixels that ER-Force's simulator computes the ball blob's
+// area with (reference/ssl-protocols.md §6.2).
+constexpr double kFocalLengthPx = 390.0;
+// The direction the league's camera_position_error offsets reported camera positions in (§6.1).
+const Vec3 kCameraErrorDirection = Vec3(0.3, 0.7, 0.05).normalized();
 
 }  // namespace
 
@@ -36,10 +45,32 @@ void PerceptionPipeline::Reset(std::uint64_t seed) {
 }
 
 void PerceptionPipeline::Reset() {
-  next_capture_ns_.assign(model_.cameras.size(), period_ns_);
+  // Synchronised cameras all capture on one grid; unsynchronised ones each on its own phase.
+  phase_ns_.assign(model_.cameras.size(), 0);
+  if (model_.unsynchronised_cameras) {
+    std::mt19937_64 phases(seed_ ^ kPhaseStream);
+    std::uniform_int_distribution<std::int64_t> phase(0, period_ns_ - 1);
+    for (std::int64_t& p : phase_ns_) p = phase(phases);
+  }
+  next_capture_ns_.resize(model_.cameras.size());
+  for (std::size_t c = 0; c < next_capture_ns_.size(); ++c) next_capture_ns_[c] = period_ns_ + phase_ns_[c];
   frame_numbers_.assign(model_.cameras.size(), 0);
   in_flight_.clear();
   rng_.seed(seed_ ^ kVisionStream);
+}
+
+std::int64_t PerceptionPipeline::NextCapture(std::size_t c, std::int64_t now_ns) {
+  // The camera's next frame on its own grid after now (a long step skips frames, as a slow PC
+  // would), then its jitter: drawn only when there is some, so that none leaves the noise as it was.
+  const std::int64_t phase = c < phase_ns_.size() ? phase_ns_[c] : 0;
+  if (model_.capture_jitter <= 0) return phase + ((now_ns - phase) / period_ns_ + 1) * period_ns_;
+  // With jitter a capture may come before its grid point: the frame just taken is the grid
+  // point nearest to now, the next one the grid point after it.
+  const std::int64_t taken = (now_ns - phase + period_ns_ / 2) / period_ns_;
+  std::normal_distribution<double> jitter(0.0, model_.capture_jitter);
+  const double half = 0.45 * static_cast<double>(period_ns_) * 1e-9;  // frames keep their order
+  const std::int64_t next = phase + (taken + 1) * period_ns_ + Ns(std::clamp(jitter(rng_), -half, half));
+  return std::max(next, now_ns + 1);
 }
 
 void PerceptionPipeline::Configure(const PerceptionModel& model) {
@@ -65,7 +96,14 @@ void PerceptionPipeline::SetCameras(std::vector<CameraModel> cameras) {
       }
     }
   }
+  std::vector<std::int64_t> phases(cameras.size(), 0);
+  for (std::size_t i = 0; i < cameras.size(); ++i) {
+    for (std::size_t j = 0; j < model_.cameras.size() && j < phase_ns_.size(); ++j) {
+      if (model_.cameras[j].id == cameras[i].id) phases[i] = phase_ns_[j];
+    }
+  }
   model_.cameras = std::move(cameras);
+  phase_ns_ = std::move(phases);
   next_capture_ns_ = std::move(schedule);
   frame_numbers_ = std::move(numbers);
 }
@@ -75,12 +113,15 @@ bool PerceptionPipeline::CaptureDue(std::int64_t now_ns) const {
                      [now_ns](std::int64_t t) { return t <= now_ns; });
 }
 
-void PerceptionPipeline::Capture(const WorldSnapshot& truth) {
+void PerceptionPipeline::Capture(const WorldSnapshot& truth, const std::vector<double>& front_distances) {
   for (std::size_t c = 0; c < model_.cameras.size(); ++c) {
     if (next_capture_ns_[c] > truth.sim_time_ns) continue;
-    in_flight_.push_back(Frame(c, truth));
-    // The next frame on the camera's own schedule (a long step skips frames, as a slow PC would).
-    while (next_capture_ns_[c] <= truth.sim_time_ns) next_capture_ns_[c] += period_ns_;
+    VisionFrame f = Frame(c, truth, front_distances);
+    // Frames leave in the order of their send times (unsynchronised cameras interleave).
+    auto at = in_flight_.end();
+    while (at != in_flight_.begin() && std::prev(at)->t_sent_ns > f.t_sent_ns) --at;
+    in_flight_.insert(at, std::move(f));
+    next_capture_ns_[c] = NextCapture(c, truth.sim_time_ns);
   }
 }
 
@@ -114,6 +155,13 @@ void PerceptionPipeline::RestoreState(const PerceptionState& s) {
   m.ball_drop = s.model.ball_drop;
   m.robot_drop = s.model.robot_drop;
   m.camera_overlap = s.model.camera_overlap;
+  m.ball_occlusion = s.model.ball_occlusion;
+  m.ball_visibility_threshold = s.model.ball_visibility_threshold;
+  m.ball_area_sigma = s.model.ball_area_sigma;
+  m.dribbler_false_balls = s.model.dribbler_false_balls;
+  m.camera_position_error = s.model.camera_position_error;
+  m.object_offset = s.model.object_offset;
+  m.processing_time = s.model.processing_time;
   Configure(m);
   next_capture_ns_ = s.next_capture_ns;
   frame_numbers_ = s.frame_numbers;
@@ -135,43 +183,98 @@ bool PerceptionPipeline::Sees(const CameraModel& c, double x, double y) const {
   return x >= c.x_min - o && x <= c.x_max + o && y >= c.y_min - o && y <= c.y_max + o;
 }
 
-VisionFrame PerceptionPipeline::Frame(std::size_t index, const WorldSnapshot& truth) {
+Vec3 PerceptionPipeline::Reported(const CameraModel& cam, const Vec3& at, double radius) const {
+  // A camera sees an airborne ball where its ray through the ball meets the carpet.
+  const double h = std::clamp(at.z() - radius, 0.0, 0.9 * cam.position.z());
+  const double scale = cam.position.z() / (cam.position.z() - h);
+  Vec3 p(cam.position.x() + (at.x() - cam.position.x()) * scale, cam.position.y() + (at.y() - cam.position.y()) * scale,
+         0.0);
+  return p;
+}
+
+VisionFrame PerceptionPipeline::Frame(std::size_t index, const WorldSnapshot& truth,
+                                      const std::vector<double>& front_distances) {
   const CameraModel& cam = model_.cameras[index];
   std::normal_distribution<double> unit_noise(0.0, 1.0);
   std::uniform_real_distribution<double> chance(0.0, 1.0);
   VisionFrame f;
   f.camera_id = cam.id;
   f.frame_number = frame_numbers_[index]++;
-  f.t_capture_ns = truth.sim_time_ns;
   f.t_sent_ns = truth.sim_time_ns + latency_ns_;
+  // The capture time the frame reports: the true one, or the sending time less the processing
+  // time the league's presets give (which is shorter than the whole delay).
+  f.t_capture_ns = model_.processing_time ? f.t_sent_ns - Ns(*model_.processing_time) : truth.sim_time_ns;
+  // Noise grows away from the camera's nadir; every position shifts from the field's centre
+  // towards the camera (none for a camera above the centre).
+  const auto growth = [&](double x, double y) {
+    return 1.0 + model_.noise_growth * std::hypot(x - cam.position.x(), y - cam.position.y());
+  };
+  Vec3 offset = Vec3::Zero();
+  if (model_.object_offset > 0 && std::hypot(cam.position.x(), cam.position.y()) > 1e-6) {
+    offset = model_.object_offset * Vec3(cam.position.x(), cam.position.y(), 0.0).normalized();
+  }
   // Every random number is drawn whether or not it is used, so one object's drop-out does not
-  // shift the noise of everything after it.
+  // shift the noise of everything after it; what a setting adds is drawn only when it is on.
   const BallState& b = truth.ball;
   const double ball_noise_x = unit_noise(rng_), ball_noise_y = unit_noise(rng_);
   const bool ball_lost = chance(rng_) < model_.ball_drop;
+  const double area_noise = model_.ball_area_sigma > 0 ? unit_noise(rng_) : 0.0;
   if (Sees(cam, b.pose.position.x(), b.pose.position.y()) && !ball_lost) {
-    // A camera sees an airborne ball where its ray through the ball meets the carpet.
-    const double h = std::clamp(b.pose.position.z() - b.radius, 0.0, 0.9 * cam.position.z());
-    const double scale = cam.position.z() / (cam.position.z() - h);
-    DetectedBall d;
-    d.x = cam.position.x() + (b.pose.position.x() - cam.position.x()) * scale +
-          model_.ball_position_sigma * ball_noise_x;
-    d.y = cam.position.y() + (b.pose.position.y() - cam.position.y()) * scale +
-          model_.ball_position_sigma * ball_noise_y;
-    d.z = 0.0;
-    f.balls.push_back(d);
+    BallVisibility seen;
+    seen.centroid = b.pose.position;
+    if (model_.ball_occlusion) {
+      seen = VisibleBall(b.pose.position, b.radius, cam.position, truth.robots, front_distances);
+    }
+    if (!model_.ball_occlusion || seen.fraction >= model_.ball_visibility_threshold) {
+      // A moving ball smears over the exposure: its blob's centroid half the travel behind.
+      const Vec3 travel = b.twist.linear * model_.exposure;
+      const Vec3 p = Reported(cam, seen.centroid - 0.5 * travel, b.radius);
+      const double sigma = model_.ball_position_sigma * growth(p.x(), p.y());
+      DetectedBall d;
+      d.x = p.x() + sigma * ball_noise_x + offset.x();
+      d.y = p.y() + sigma * ball_noise_y + offset.y();
+      d.z = 0.0;
+      // The blob: the ball's disc at its distance from the camera, the part of it seen, longer by
+      // the smear, with noise.
+      const double disc_px = kFocalLengthPx * b.radius / std::max(0.1, (cam.position - b.pose.position).norm());
+      const double smear = 1.0 + 2.0 * travel.head<2>().norm() / (M_PI * b.radius);
+      d.area = std::max(0.0, M_PI * disc_px * disc_px * seen.fraction * smear + model_.ball_area_sigma * area_noise);
+      f.balls.push_back(d);
+    }
   }
-  for (const RobotState& r : truth.robots) {
+  for (std::size_t i = 0; i < truth.robots.size(); ++i) {
+    const RobotState& r = truth.robots[i];
     const double nx = unit_noise(rng_), ny = unit_noise(rng_), nyaw = unit_noise(rng_);
     const bool lost = chance(rng_) < model_.robot_drop;
-    if (!r.present || lost || !Sees(cam, r.pose.position.x(), r.pose.position.y())) continue;
+    // A false ball at a corner of its dribbler: the light barrier's red diode, seen as a ball.
+    bool false_ball = false, left_corner = false;
+    if (model_.dribbler_false_balls > 0) {
+      false_ball = chance(rng_) < model_.dribbler_false_balls / model_.frame_rate;
+      left_corner = chance(rng_) < 0.5;
+    }
+    if (!r.present || !Sees(cam, r.pose.position.x(), r.pose.position.y())) continue;
+    if (false_ball && i < front_distances.size()) {
+      const double front = front_distances[i];
+      const double side = std::sqrt(std::max(0.0, r.radius * r.radius - front * front)) * (left_corner ? 1 : -1);
+      const double yaw = r.pose.Yaw();
+      DetectedBall d;
+      d.x = r.pose.position.x() + front * std::cos(yaw) - side * std::sin(yaw) + offset.x();
+      d.y = r.pose.position.y() + front * std::sin(yaw) + side * std::cos(yaw) + offset.y();
+      const double disc_px = kFocalLengthPx * b.radius / std::max(0.1, (cam.position - r.pose.position).norm());
+      d.area = M_PI * disc_px * disc_px;
+      f.balls.push_back(d);
+    }
+    if (lost) continue;
+    const double sigma = growth(r.pose.position.x(), r.pose.position.y());
     DetectedRobot d;
     d.id = r.id;
-    d.x = r.pose.position.x() + model_.robot_position_sigma * nx;
-    d.y = r.pose.position.y() + model_.robot_position_sigma * ny;
-    d.yaw = WrapAngle(r.pose.Yaw() + model_.robot_orientation_sigma * nyaw);
+    d.x = r.pose.position.x() + model_.robot_position_sigma * sigma * nx + offset.x();
+    d.y = r.pose.position.y() + model_.robot_position_sigma * sigma * ny + offset.y();
+    d.yaw = WrapAngle(r.pose.Yaw() + model_.robot_orientation_sigma * sigma * nyaw);
     f.robots.push_back(d);
   }
+  // Several ball detections in a frame come in no particular order, as from ssl-vision.
+  if (f.balls.size() > 1) std::shuffle(f.balls.begin(), f.balls.end(), rng_);
   return f;
 }
 

@@ -14,17 +14,21 @@
 
 namespace ubersim::kernel {
 
-/// Samples the ground truth as the cameras see it: at each camera's frame rate, with noise,
-/// drop-outs and an airborne ball projected onto the carpet, and holds each frame for the
-/// latency. Deterministic for a seed.
+/// Samples the ground truth as the cameras see it: at each camera's frame rate (each on its own
+/// phase when unsynchronised, with capture jitter), with noise (growing away from the camera's
+/// nadir), drop-outs, systematic offsets, a ball hidden by robots (ray-cast) or smeared by its
+/// motion, false ball detections at dribblers, an airborne ball projected onto the carpet, and
+/// holds each frame for the latency. Deterministic for a seed.
 class PerceptionPipeline {
  public:
   PerceptionPipeline(PerceptionModel model, std::uint64_t seed);
 
   /// True when a camera is due to capture at `now_ns` (so the caller takes the ground truth only then).
   bool CaptureDue(std::int64_t now_ns) const;
-  /// Captures one frame for every camera due at the ground truth's time.
-  void Capture(const WorldSnapshot& truth);
+  /// Captures one frame for every camera due at the ground truth's time. `front_distances`
+  /// (robot centre to its flat front, m, in truth.robots' order) places false ball detections at
+  /// the dribblers' corners; empty when none are modelled.
+  void Capture(const WorldSnapshot& truth, const std::vector<double>& front_distances = {});
   /// Frames whose send time has come (t_sent <= now), oldest first.
   std::vector<VisionFrame> Release(std::int64_t now_ns);
   /// Forgets queued frames and restarts the schedule (world reset).
@@ -44,14 +48,20 @@ class PerceptionPipeline {
   void RestoreState(const PerceptionState& state);
 
  private:
-  VisionFrame Frame(std::size_t camera, const WorldSnapshot& truth);
+  VisionFrame Frame(std::size_t camera, const WorldSnapshot& truth, const std::vector<double>& front_distances);
   bool Sees(const CameraModel& c, double x, double y) const;
+  // The next capture of camera `c` after `now_ns`: its phase's next frame, with jitter.
+  std::int64_t NextCapture(std::size_t c, std::int64_t now_ns);
+  // Where camera `cam` reports a ball whose visible part is centred at `at` (field frame): along
+  // its ray onto the carpet, shifted by the object offset.
+  Vec3 Reported(const CameraModel& cam, const Vec3& at, double radius) const;
 
   PerceptionModel model_;
   std::uint64_t seed_;
   std::int64_t period_ns_;
   std::int64_t latency_ns_;
   std::vector<std::int64_t> next_capture_ns_;
+  std::vector<std::int64_t> phase_ns_;  // per camera: its frames' offset (from the seed alone)
   std::vector<std::uint32_t> frame_numbers_;
   std::deque<VisionFrame> in_flight_;
   std::mt19937_64 rng_;

@@ -174,6 +174,7 @@ void PutFrame(const VisionFrame& f, pb::VisionFrame* out) {
     o->set_y(b.y);
     o->set_z(b.z);
     o->set_confidence(b.confidence);
+    o->set_area(b.area);
   }
   for (const DetectedRobot& r : f.robots) {
     pb::DetectedRobot* o = out->add_robots();
@@ -192,7 +193,7 @@ VisionFrame GetFrame(const pb::VisionFrame& in) {
   f.frame_number = in.frame_number();
   f.t_capture_ns = in.t_capture_ns();
   f.t_sent_ns = in.t_sent_ns();
-  for (const pb::DetectedBall& b : in.balls()) f.balls.push_back(DetectedBall{b.x(), b.y(), b.z(), b.confidence()});
+  for (const pb::DetectedBall& b : in.balls()) f.balls.push_back(DetectedBall{b.x(), b.y(), b.z(), b.confidence(), b.area()});
   for (const pb::DetectedRobot& r : in.robots()) {
     DetectedRobot d;
     d.id = RobotId{TeamOf(r.team(), "a vision frame"), r.id()};
@@ -274,13 +275,28 @@ void PutState(const SavedState& s, pb::WorldState& out) {
   po->set_ball_drop(v.model.ball_drop);
   po->set_robot_drop(v.model.robot_drop);
   po->set_camera_overlap(v.model.camera_overlap);
+  po->set_ball_occlusion(v.model.ball_occlusion);
+  po->set_ball_visibility_threshold(v.model.ball_visibility_threshold);
+  po->set_ball_area_sigma(v.model.ball_area_sigma);
+  po->set_dribbler_false_balls(v.model.dribbler_false_balls);
+  po->set_camera_position_error(v.model.camera_position_error);
+  po->set_object_offset(v.model.object_offset);
+  po->set_has_processing_time(v.model.processing_time.has_value());
+  po->set_processing_time(v.model.processing_time.value_or(0.0));
   for (std::int64_t t : v.next_capture_ns) po->add_next_capture_ns(t);
   for (std::uint32_t n : v.frame_numbers) po->add_frame_numbers(n);
   for (const VisionFrame& f : v.in_flight) PutFrame(f, po->add_in_flight());
   po->set_rng(v.rng);
+  out.set_held_ball(s.held_ball);
+  out.set_ball_held(s.ball_held_by.has_value());
+  if (s.ball_held_by) {
+    out.set_held_team(static_cast<std::uint32_t>(s.ball_held_by->team));
+    out.set_held_id(s.ball_held_by->id);
+  }
   pb::Radio* ro = out.mutable_radio();
   ro->set_latency(s.radio.model.latency);
   ro->set_loss(s.radio.model.loss);
+  ro->set_response_loss(s.radio.model.response_loss);
   for (const auto& [due, command] : s.radio.queue) {
     ro->add_due_ns(due);
     PutCommand(command, ro->add_queue());
@@ -373,13 +389,23 @@ SavedState GetState(const pb::WorldState& in) {
   vm.ball_drop = po.ball_drop();
   vm.robot_drop = po.robot_drop();
   vm.camera_overlap = po.camera_overlap();
+  vm.ball_occlusion = po.ball_occlusion();
+  vm.ball_visibility_threshold = po.ball_visibility_threshold();
+  vm.ball_area_sigma = po.ball_area_sigma();
+  vm.dribbler_false_balls = po.dribbler_false_balls();
+  vm.camera_position_error = po.camera_position_error();
+  vm.object_offset = po.object_offset();
+  if (po.has_processing_time()) vm.processing_time = po.processing_time();
   s.perception.next_capture_ns.assign(po.next_capture_ns().begin(), po.next_capture_ns().end());
   s.perception.frame_numbers.assign(po.frame_numbers().begin(), po.frame_numbers().end());
   for (const pb::VisionFrame& f : po.in_flight()) s.perception.in_flight.push_back(GetFrame(f));
   s.perception.rng = po.rng();
+  s.held_ball = in.held_ball();
+  if (in.ball_held()) s.ball_held_by = RobotId{in.held_team() == 0 ? Team::kBlue : Team::kYellow, in.held_id()};
   const pb::Radio& ro = in.radio();
   s.radio.model.latency = ro.latency();
   s.radio.model.loss = ro.loss();
+  s.radio.model.response_loss = ro.response_loss();
   if (ro.due_ns_size() != ro.queue_size()) throw SnapshotError("the radio queue's times and commands differ in number");
   for (int i = 0; i < ro.queue_size(); ++i) s.radio.queue.emplace_back(ro.due_ns(i), GetCommand(ro.queue(i)));
   s.radio.rng = ro.rng();

@@ -401,7 +401,10 @@ bool Robot::Command(const CommandEvent& e, std::string& why) {
     if (!alive) refuse(std::string(ToString(kind)) + " failed on the command");
   };
   if (e.move) deliver(PluginKind::kDrive, "SetCommand", [&] { drive_->SetCommand(*e.move); });
-  if (e.dribbler_speed) deliver(PluginKind::kDribbler, "SetSpeed", [&] { dribbler_->SetSpeed(*e.dribbler_speed); });
+  if (e.dribbler_speed) {
+    deliver(PluginKind::kDribbler, "SetSpeed", [&] { dribbler_->SetSpeed(*e.dribbler_speed); });
+    dribbler_speed_ = *e.dribbler_speed;
+  }
   if (e.kick) deliver(PluginKind::kKicker, "Kick", [&] { kicker_->Kick(*e.kick); });
   return ok;
 }
@@ -456,6 +459,16 @@ RobotState Robot::Kinematics() const {
   s.radius = model_->body.radius;
   s.height = model_->body.height;
   return s;
+}
+
+bool Robot::TouchesBall() const {
+  bool touches = false;
+  for (const auto& p : parts_) {
+    if (p->kind == PluginKind::kDribbler && !p->failed) {
+      Queried(*p, "TouchesBall", [&] { touches = dribbler_->TouchesBall(); });
+    }
+  }
+  return touches;
 }
 
 RobotState Robot::State() const {

@@ -53,6 +53,9 @@ class Robot {
   BodyImpl& chassis() { return *chassis_; }         ///< chassis body
   NodeImpl& node() { return *node_; }               ///< the robot's node
   bool present() const { return present_; }         ///< on the field
+  double dribbler_speed() const { return dribbler_speed_; }  ///< the last commanded roller speed, rad/s
+  /// True when its dribbler touched the ball in the last step (false without a working dribbler).
+  bool TouchesBall() const;
   const RobotModel& model() const { return *model_; }  ///< what it was built from
 
   /// Components' PreStep (drive, dribbler, kicker order).
@@ -113,6 +116,7 @@ class Robot {
   NodeImpl* node_ = nullptr;
   BodyImpl* chassis_ = nullptr;
   bool present_ = true;
+  double dribbler_speed_ = 0.0;
   double rest_height_ = 0.0;
   std::vector<std::unique_ptr<Part>> parts_;  // drive, dribbler, kicker (those present)
   Drive* drive_ = nullptr;

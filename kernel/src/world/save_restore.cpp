@@ -112,6 +112,8 @@ SavedState WorldImpl::Save() const {
   }
   s.perception = perception_.SaveState();
   s.radio = radio_.SaveState();
+  s.held_ball = held_ball_;
+  s.ball_held_by = held_.holder();
   s.faults = faults_.faults();
   for (const auto& [key, spec] : specs_) s.robot_specs.emplace_back(RobotId{static_cast<Team>(key.first), key.second}, spec);
   return s;
@@ -198,6 +200,13 @@ void WorldImpl::Restore(const SavedState& s) {
     ApplyOdeState(*scene_, s);
     perception_.RestoreState(s.perception);
     radio_.RestoreState(s.radio);
+    held_ball_ = s.held_ball;
+    held_.Release();
+    if (s.ball_held_by) {
+      Robot* holder = FindRobot(*s.ball_held_by);
+      if (!holder) throw std::invalid_argument("the robot holding the ball, " + ToString(*s.ball_held_by) + ", is not in this world");
+      held_.Attach(world_.get(), holder->id(), holder->chassis().id(), ball_->id());
+    }
   } catch (const std::exception& e) {
     UseField(field_before);
     roster_ = model_.robots;  // as freshly built, not half restored

@@ -60,7 +60,10 @@ class TransportHost final : public TransportContext {
   const std::string& WorldName() const override { return world_name_; }
   std::vector<CameraInfo> Cameras() const override {
     std::vector<CameraInfo> out;
-    for (const CameraModel& c : world_.perception().cameras) out.push_back(CameraInfo{c.id, c.position});
+    // The positions reported, with the league's camera_position_error (projection uses the true ones).
+    const PerceptionModel& vision = world_.perception();
+    const Vec3 error = vision.camera_position_error * Vec3(0.3, 0.7, 0.05).normalized();
+    for (const CameraModel& c : vision.cameras) out.push_back(CameraInfo{c.id, c.position + error});
     return out;
   }
   bool LocalOnly() const override { return world_.model().local_only; }
@@ -150,6 +153,7 @@ WorldImpl::WorldImpl(const WorldModel& model, PluginRegistry& registry, Log& log
       ode_random_seed_(static_cast<unsigned long>(model.seed)),
       perception_(model.perception, model.seed),
       radio_(model.radio, model.seed),
+      held_ball_(model.held_ball),
       faults_(ParseFaultPolicy(model.on_plugin_fault), log) {
   if (!model_.field || !model_.ball) throw std::runtime_error("world has no field or ball model");
   field_geometry_ = model_.field->geometry;
@@ -182,6 +186,7 @@ WorldImpl::~WorldImpl() {
   // Transports first: they may still post events from their threads until Stop joins them.
   for (auto& t : transports_) t->Stop();
   transports_.clear();
+  held_.Release();
   robots_.clear();
   collision_.reset();
   scene_.reset();
@@ -391,6 +396,8 @@ void WorldImpl::Reset() {
 }
 
 void WorldImpl::Rebuild() {
+  held_.Release();  // its joint before the ODE world it is in
+  hold_after_ns_ = 0;
   robots_.clear();
   collision_.reset();
   scene_.reset();
@@ -402,6 +409,8 @@ void WorldImpl::Rebuild() {
   ode_random_seed_ = static_cast<unsigned long>(model_.seed);
   perception_.Reset();
   radio_.Reset();
+  responses_lost_.clear();
+  held_ball_ = model_.held_ball;
   faults_.Clear();
   stopped_ = false;
   faults_.SetNow(0, 0);
@@ -462,6 +471,8 @@ void WorldImpl::Apply(const PositionEvent& e) {
     log_.Warning("position event with non-finite values ignored");
     return;
   }
+  // A teleport of the ball or of the robot holding it lets go of it.
+  if (e.target.is_ball || (held_.holder() && e.target.robot == *held_.holder())) held_.Release();
   if (e.target.is_ball) {
     Pose p = ball_->GetPose();
     if (e.position) {
@@ -580,7 +591,35 @@ void WorldImpl::Apply(const CommandEvent& e) {
   if (!radio_.Send(e, sim_time_ns_)) ++event_counters_.lost;
 }
 
+namespace {
+// After a kick no dribbler holds the ball for this long (ER-Force's kicker recharges in 0.1 s):
+// the kicked ball leaves the mouth instead of being caught again by the dribbler it left.
+constexpr std::int64_t kKickedBallFreeNs = 100'000'000;
+}  // namespace
+
+void WorldImpl::UpdateHeldBall() {
+  if (!held_ball_) {
+    held_.Release();
+    return;
+  }
+  if (const std::optional<RobotId>& id = held_.holder()) {
+    const Robot* r = FindRobot(*id);
+    if (!r || !r->present() || r->dribbler_speed() <= 0) held_.Release();
+    return;
+  }
+  if (sim_time_ns_ < hold_after_ns_) return;  // a kicked ball gets away first
+  for (const auto& r : robots_) {
+    if (r->present() && r->dribbler_speed() > 0 && r->TouchesBall()) {
+      held_.Attach(world_.get(), r->id(), r->chassis().id(), ball_->id());
+      return;
+    }
+  }
+}
+
 void WorldImpl::Deliver(const CommandEvent& e) {
+  // The holder lets go of the ball to kick it, or when its dribbler stops.
+  if (held_.holder() == e.robot && (e.kick || (e.dribbler_speed && *e.dribbler_speed <= 0))) held_.Release();
+  if (e.kick) hold_after_ns_ = sim_time_ns_ + kKickedBallFreeNs;
   Robot* r = FindRobot(e.robot);
   std::string why;
   if (r && r->Command(e, why)) {
@@ -595,7 +634,10 @@ void WorldImpl::Deliver(const CommandEvent& e) {
 void WorldImpl::Apply(const RealismEvent& e) {
   const std::optional<double> values[] = {e.vision_latency, e.ball_position_noise, e.robot_position_noise,
                                           e.robot_orientation_noise, e.ball_drop, e.robot_drop,
-                                          e.camera_overlap, e.radio_latency, e.radio_loss};
+                                          e.camera_overlap, e.radio_latency, e.radio_loss,
+                                          e.radio_response_loss, e.ball_visibility_threshold, e.ball_area_noise,
+                                          e.dribbler_false_balls, e.camera_position_error, e.object_offset,
+                                          e.processing_time};
   for (const auto& v : values) {
     if (v && (!std::isfinite(*v) || *v < 0)) {
       ++event_counters_.rejected;
@@ -603,7 +645,7 @@ void WorldImpl::Apply(const RealismEvent& e) {
       return;
     }
   }
-  for (const auto& p : {e.ball_drop, e.robot_drop, e.radio_loss}) {
+  for (const auto& p : {e.ball_drop, e.robot_drop, e.radio_loss, e.radio_response_loss, e.ball_visibility_threshold}) {
     if (p && *p > 1) {
       ++event_counters_.rejected;
       log_.Warning("a probability in the realism settings is above 1; ignored");
@@ -618,11 +660,20 @@ void WorldImpl::Apply(const RealismEvent& e) {
   if (e.ball_drop) vision.ball_drop = *e.ball_drop;
   if (e.robot_drop) vision.robot_drop = *e.robot_drop;
   if (e.camera_overlap) vision.camera_overlap = *e.camera_overlap;
+  if (e.ball_occlusion) vision.ball_occlusion = *e.ball_occlusion;
+  if (e.ball_visibility_threshold) vision.ball_visibility_threshold = *e.ball_visibility_threshold;
+  if (e.ball_area_noise) vision.ball_area_sigma = *e.ball_area_noise;
+  if (e.dribbler_false_balls) vision.dribbler_false_balls = *e.dribbler_false_balls;
+  if (e.camera_position_error) vision.camera_position_error = *e.camera_position_error;
+  if (e.object_offset) vision.object_offset = *e.object_offset;
+  if (e.processing_time) vision.processing_time = *e.processing_time;
   perception_.Configure(vision);
   RadioModel radio = radio_.model();
   if (e.radio_latency) radio.latency = *e.radio_latency;
   if (e.radio_loss) radio.loss = *e.radio_loss;
+  if (e.radio_response_loss) radio.response_loss = *e.radio_response_loss;
   radio_.Configure(radio);
+  if (e.held_ball) held_ball_ = *e.held_ball;
   ++event_counters_.applied;
 }
 
@@ -861,6 +912,7 @@ void WorldImpl::Step() {
   const StepInfo after{info.step, info.dt, clock_.time_ns()};
   t0 = SteadyClock::now();
   for (auto& r : robots_) r->PostStep(after);
+  UpdateHeldBall();
   timings_.plugins_ns += ElapsedNs(t0);
   // The last good state, or the repair when something went non-finite nonetheless.
   if (!last_good_.CaptureIfFinite()) {
@@ -873,9 +925,10 @@ void WorldImpl::Step() {
   // of a snapshot's work.
   std::optional<WorldSnapshot> truth;
   t0 = SteadyClock::now();
+  responses_lost_ = radio_.ResponsesLost(robots_.size());
   if (perception_.CaptureDue(sim_time_ns_)) {
     truth = transports_.empty() ? Kinematics() : GroundTruth();
-    perception_.Capture(*truth);
+    perception_.Capture(*truth, FrontDistances(*truth));
   }
   const std::vector<VisionFrame> frames = perception_.Release(sim_time_ns_);
   timings_.perception_ns += ElapsedNs(t0);
@@ -918,6 +971,19 @@ void WorldImpl::RepairNonFinite(const char* when) {
 WorldSnapshot WorldImpl::GroundTruth() const { return Snapshot(true); }
 WorldSnapshot WorldImpl::Kinematics() const { return Snapshot(false); }
 
+std::vector<double> WorldImpl::FrontDistances(const WorldSnapshot& truth) const {
+  // Only the occlusion of the ball and the false balls at dribblers need the robots' fronts.
+  const PerceptionModel& vision = perception_.model();
+  if (!vision.ball_occlusion && vision.dribbler_false_balls <= 0) return {};
+  std::vector<double> out;
+  out.reserve(truth.robots.size());
+  for (const RobotState& r : truth.robots) {
+    const Robot* robot = FindRobot(r.id);
+    out.push_back(robot ? robot->model().body.front_distance : r.radius);
+  }
+  return out;
+}
+
 WorldSnapshot WorldImpl::Snapshot(bool parts) const {
   WorldSnapshot s;
   s.step = clock_.steps();
@@ -926,7 +992,10 @@ WorldSnapshot WorldImpl::Snapshot(bool parts) const {
   s.ball.twist = ball_->GetTwist();
   s.ball.radius = model_.ball->radius;
   s.robots.reserve(robots_.size());
-  for (const auto& r : robots_) s.robots.push_back(parts ? r->State() : r->Kinematics());
+  for (std::size_t i = 0; i < robots_.size(); ++i) {
+    s.robots.push_back(parts ? robots_[i]->State() : robots_[i]->Kinematics());
+    s.robots.back().feedback_lost = i < responses_lost_.size() && responses_lost_[i];
+  }
   // Blue first, then yellow, each by id (robots that came on later are last in robots_).
   std::sort(s.robots.begin(), s.robots.end(), [](const RobotState& a, const RobotState& b) {
     return a.id.team != b.id.team ? a.id.team == Team::kBlue : a.id.id < b.id.id;

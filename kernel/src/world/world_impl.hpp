@@ -26,6 +26,7 @@
 #include "physics/ode_handles.hpp"
 #include "physics/scene_graph.hpp"
 #include "world/fault_monitor.hpp"
+#include "world/held_ball.hpp"
 #include "world/repeated_warnings.hpp"
 
 namespace ubersim::kernel {
@@ -85,6 +86,10 @@ class WorldImpl {
   WorldSnapshot GroundTruth() const;
   /// GroundTruth without what robots' parts report (Robot::Kinematics): what cameras see.
   WorldSnapshot Kinematics() const;
+  /// Each robot's centre-to-front distance in `truth.robots`' order, when the cameras need them.
+  std::vector<double> FrontDistances(const WorldSnapshot& truth) const;
+  /// Holds the ball to the robot whose turning dribbler touches it, or lets it go (held_ball_).
+  void UpdateHeldBall();
   /// A hash of every body's position, orientation and velocities, bit for bit.
   std::uint64_t StateHash() const;
 
@@ -173,6 +178,7 @@ class WorldImpl {
   // scene graph, and the ODE world last.
   OdeWorld world_;
   std::unique_ptr<SceneGraph> scene_;
+  HeldBall held_;  // after world_: its joint goes before the world does
   std::unique_ptr<CollisionManager> collision_;
   BodyImpl* ball_ = nullptr;
   IslandStepper islands_;
@@ -206,6 +212,9 @@ class WorldImpl {
   EventCounters event_counters_;
   PerceptionPipeline perception_;
   RadioLink radio_;
+  std::vector<bool> responses_lost_;  // per robot in robots_' order: its feedback lost this step
+  bool held_ball_ = false;            // dribblers hold the ball by a constraint (model, realism events)
+  std::int64_t hold_after_ns_ = 0;    // no hold before this time (a kick just happened)
   std::function<void(const VisionFrame&)> vision_observer_;
   FaultMonitor faults_;
   RepeatedWarnings repeated_{log_, 1'000'000'000};  // refused commands: one line per robot per simulated second

@@ -29,6 +29,7 @@ inline constexpr char kVisionPort[] = "UBERSIM_VISION_PORT_NOT_APPLIED";  // no 
 inline constexpr char kTeleportSafely[] = "UBERSIM_UNSUPPORTED_TELEPORT_SAFELY";
 inline constexpr char kByForce[] = "UBERSIM_UNSUPPORTED_BY_FORCE";
 inline constexpr char kUnknownRealism[] = "UBERSIM_UNKNOWN_REALISM_TYPE";
+// No longer sent: every RealismConfigErForce field is applied. Kept so the code is never reused.
 inline constexpr char kRealismFields[] = "UBERSIM_UNSUPPORTED_REALISM_FIELDS";
 inline constexpr char kWheelVelocity[] = "UBERSIM_UNSUPPORTED_WHEEL_VELOCITY";
 

@@ -136,64 +136,74 @@ std::string_view LastSegment(std::string_view type_url) {
   return slash == std::string_view::npos ? type_url : type_url.substr(slash + 1);
 }
 
-// RealismConfigErForce → RealismEvent; fields the kernel does not model are listed unless they
-// ask for what the simulator does anyway (zero offsets, no occlusion, physical dribbling).
+// RealismConfigErForce → RealismEvent, every field (docs/interfaces.md): ns become s,
+// simulate_dribbling false becomes a held ball. One invalid value refuses the whole message, so a
+// preset is never applied in part.
 void MapErForceRealism(const RealismConfigErForce& r, Errors& errors, std::vector<Event>& events) {
   RealismEvent e;
-  std::vector<std::string> unsupported;
+  bool any = false;
   std::string invalid;
-  auto length = [&](bool has, float v, const char* name, std::optional<double>& into) {
+  auto refuse = [&](const char* name) { invalid += std::string(invalid.empty() ? "" : ", ") + name; };
+  // Lengths, σ and rates: finite and >= 0.
+  auto non_negative = [&](bool has, float v, const char* name, std::optional<double>& into) {
     if (!has) return;
-    if (!std::isfinite(v) || v < 0) invalid += std::string(invalid.empty() ? "" : ", ") + name;
+    if (!std::isfinite(v) || v < 0) refuse(name);
     into = v;
+    any = true;
   };
   auto probability = [&](bool has, float v, const char* name, std::optional<double>& into) {
     if (!has) return;
-    if (!std::isfinite(v) || v < 0 || v > 1) invalid += std::string(invalid.empty() ? "" : ", ") + name;
+    if (!std::isfinite(v) || v < 0 || v > 1) refuse(name);
     into = v;
+    any = true;
   };
   auto nanoseconds = [&](bool has, double ns, const char* name, std::optional<double>& into) {
     if (!has) return;
-    if (ns < 0 || ns > 10e9) invalid += std::string(invalid.empty() ? "" : ", ") + name;
+    if (ns < 0 || ns > 10e9) refuse(name);
     into = ns * 1e-9;
+    any = true;
   };
-  length(r.has_stddev_ball_p(), r.stddev_ball_p(), "stddev_ball_p", e.ball_position_noise);
-  length(r.has_stddev_robot_p(), r.stddev_robot_p(), "stddev_robot_p", e.robot_position_noise);
-  length(r.has_stddev_robot_phi(), r.stddev_robot_phi(), "stddev_robot_phi", e.robot_orientation_noise);
-  length(r.has_camera_overlap(), r.camera_overlap(), "camera_overlap", e.camera_overlap);
-  probability(r.has_missing_ball_detections(), r.missing_ball_detections(), "missing_ball_detections", e.ball_drop);
+  auto flag = [&](bool has, bool v, std::optional<bool>& into) {
+    if (!has) return;
+    into = v;
+    any = true;
+  };
+  // In the proto's field order, 1–18.
+  non_negative(r.has_stddev_ball_p(), r.stddev_ball_p(), "stddev_ball_p", e.ball_position_noise);
+  non_negative(r.has_stddev_robot_p(), r.stddev_robot_p(), "stddev_robot_p", e.robot_position_noise);
+  non_negative(r.has_stddev_robot_phi(), r.stddev_robot_phi(), "stddev_robot_phi", e.robot_orientation_noise);
+  non_negative(r.has_stddev_ball_area(), r.stddev_ball_area(), "stddev_ball_area", e.ball_area_noise);
+  flag(r.has_enable_invisible_ball(), r.enable_invisible_ball(), e.ball_occlusion);
+  probability(r.has_ball_visibility_threshold(), r.ball_visibility_threshold(), "ball_visibility_threshold",
+              e.ball_visibility_threshold);
+  non_negative(r.has_camera_overlap(), r.camera_overlap(), "camera_overlap", e.camera_overlap);
+  non_negative(r.has_dribbler_ball_detections(), r.dribbler_ball_detections(), "dribbler_ball_detections",
+               e.dribbler_false_balls);
+  non_negative(r.has_camera_position_error(), r.camera_position_error(), "camera_position_error",
+               e.camera_position_error);
+  probability(r.has_robot_command_loss(), r.robot_command_loss(), "robot_command_loss", e.radio_loss);
+  probability(r.has_robot_response_loss(), r.robot_response_loss(), "robot_response_loss",
+              e.radio_response_loss);
+  probability(r.has_missing_ball_detections(), r.missing_ball_detections(), "missing_ball_detections",
+              e.ball_drop);
+  nanoseconds(r.has_vision_delay(), static_cast<double>(r.vision_delay()), "vision_delay", e.vision_latency);
+  nanoseconds(r.has_vision_processing_time(), static_cast<double>(r.vision_processing_time()),
+              "vision_processing_time", e.processing_time);
+  if (r.has_simulate_dribbling()) {
+    e.held_ball = !r.simulate_dribbling();  // "perfect" dribbling: the ball held by a constraint
+    any = true;
+  }
+  non_negative(r.has_object_position_offset(), r.object_position_offset(), "object_position_offset",
+               e.object_offset);
   probability(r.has_missing_robot_detections(), r.missing_robot_detections(), "missing_robot_detections",
               e.robot_drop);
-  probability(r.has_robot_command_loss(), r.robot_command_loss(), "robot_command_loss", e.radio_loss);
-  nanoseconds(r.has_vision_delay(), static_cast<double>(r.vision_delay()), "vision_delay", e.vision_latency);
   nanoseconds(r.has_command_delay(), static_cast<double>(r.command_delay()), "command_delay", e.radio_latency);
-
-  auto not_zero = [&](bool has, double v, const char* name) {
-    if (has && v != 0.0) unsupported.emplace_back(name);
-  };
-  not_zero(r.has_stddev_ball_area(), r.stddev_ball_area(), "stddev_ball_area");
-  not_zero(r.has_ball_visibility_threshold(), r.ball_visibility_threshold(), "ball_visibility_threshold");
-  not_zero(r.has_dribbler_ball_detections(), r.dribbler_ball_detections(), "dribbler_ball_detections");
-  not_zero(r.has_camera_position_error(), r.camera_position_error(), "camera_position_error");
-  not_zero(r.has_robot_response_loss(), r.robot_response_loss(), "robot_response_loss");
-  not_zero(r.has_vision_processing_time(), static_cast<double>(r.vision_processing_time()), "vision_processing_time");
-  not_zero(r.has_object_position_offset(), r.object_position_offset(), "object_position_offset");
-  if (r.has_enable_invisible_ball() && r.enable_invisible_ball()) unsupported.emplace_back("enable_invisible_ball");
-  if (r.has_simulate_dribbling() && !r.simulate_dribbling()) unsupported.emplace_back("simulate_dribbling");
 
   if (!invalid.empty()) {
     errors.Add(codes::kInvalidValue,
-                  "RealismConfigErForce not applied: " + invalid + " must be finite, >= 0 (probabilities <= 1, delays <= 10 s)");
+               "RealismConfigErForce not applied: " + invalid + " must be finite, >= 0 (probabilities <= 1, delays <= 10 s)");
     return;
   }
-  if (!unsupported.empty()) {
-    std::string list;
-    for (const auto& u : unsupported) list += (list.empty() ? "" : ", ") + u;
-    errors.Add(codes::kRealismFields, "RealismConfigErForce fields not applied: " + list);
-  }
-  const bool any = e.vision_latency || e.ball_position_noise || e.robot_position_noise ||
-                   e.robot_orientation_noise || e.ball_drop || e.robot_drop || e.camera_overlap ||
-                   e.radio_latency || e.radio_loss;
   if (any) events.emplace_back(std::move(e));
 }
 
@@ -496,7 +506,7 @@ RobotControlResponse BuildRobotControlResponse(const std::vector<std::uint32_t>&
   for (std::uint32_t id : ids) {
     const std::optional<RobotReport> robot =
         id > kMaxRobotId ? std::nullopt : report(RobotId{team, static_cast<int>(id)});
-    if (!robot) continue;
+    if (!robot || robot->feedback_lost) continue;  // the radio lost its answer
     RobotFeedback* f = r.add_feedback();
     f->set_id(id);
     f->set_dribbler_ball_contact(robot->dribbler_ball_contact);
@@ -531,6 +541,7 @@ SSL_DetectionFrame ToDetectionFrame(const VisionFrame& frame) {
   for (const DetectedBall& b : frame.balls) {
     SSL_DetectionBall* o = d.add_balls();
     o->set_confidence(static_cast<float>(b.confidence));
+    o->set_area(transport::WholePixels(b.area));  // the blob in the image, whole pixels
     o->set_x(static_cast<float>(transport::MetresToMm(b.x)));
     o->set_y(static_cast<float>(transport::MetresToMm(b.y)));
     o->set_pixel_x(0.0f);  // no image: the simulator sees the field directly

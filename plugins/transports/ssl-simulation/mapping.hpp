@@ -83,13 +83,15 @@ std::vector<WireError> AnswerErrors(const Event& event, const EventAnswer& answe
 struct RobotReport {
   bool dribbler_ball_contact = false;  ///< the dribbler touches the ball
   std::optional<DriveFeedback> drive;  ///< none without a working drive
+  bool feedback_lost = false;          ///< the radio lost this robot's answer (robot_response_loss)
 };
 
 /// The state one robot's feedback needs; nullopt when the robot is not on the field.
 using RobotReportLookup = std::function<std::optional<RobotReport>(const RobotId&)>;
 
-/// Feedback for each commanded robot on the field (dribbler_ball_contact, and the drive's
-/// measurements as an UberSimDriveFeedback in custom), plus the errors.
+/// Feedback for each commanded robot on the field whose answer the radio did not lose
+/// (dribbler_ball_contact, and the drive's measurements as an UberSimDriveFeedback in custom),
+/// plus the errors.
 RobotControlResponse BuildRobotControlResponse(const std::vector<std::uint32_t>& ids, Team team,
                                                const RobotReportLookup& report,
                                                const std::vector<WireError>& errors);

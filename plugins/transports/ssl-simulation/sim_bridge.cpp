@@ -19,6 +19,7 @@ void SimBridge::OnPublish(const WorldSnapshot& snapshot) {
     to.id = from.id;
     to.present = from.present;
     to.report.dribbler_ball_contact = from.dribbler_ball_contact;
+    to.report.feedback_lost = from.feedback_lost;
     // Assigned into the kept entry, so the wheel speeds' storage is reused step after step.
     if (!from.drive) {
       to.report.drive.reset();

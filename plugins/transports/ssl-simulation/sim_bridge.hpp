@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // What the transport's network threads learn from the simulation thread: the robots that exist,
-// their dribbler contact and drive feedback, the step length, and (for synchronous mode) the camera frames that
-// leave the perception pipeline while a requested number of steps runs.
+// their dribbler contact and drive feedback (and whether the radio lost it), the step length,
+// and (for synchronous mode) the camera frames that leave the perception pipeline while a
+// requested number of steps runs.
 #pragma once
 
 #include <chrono>

@@ -14,6 +14,7 @@
 #include <span>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <ubersim/ubersim.hpp>
 
@@ -64,6 +65,12 @@ CameraIntrinsics ReadIntrinsics(const ParamView& p) {
   k.image_width = static_cast<int>(c.GetInt("image_width", k.image_width));
   k.image_height = static_cast<int>(c.GetInt("image_height", k.image_height));
   return k;
+}
+
+bool SameCameras(const std::vector<ubersim::CameraInfo>& a, const std::vector<ubersim::CameraInfo>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const auto& x, const auto& y) {
+    return x.id == y.id && x.position == y.position;
+  });
 }
 
 std::span<const std::uint8_t> Bytes(const std::string& s) {
@@ -125,7 +132,13 @@ class SslVisionTransport final : public ubersim::Transport {
     if (s.field && (s.field->name != geometry_.field.name || s.field->field_length != geometry_.field.field_length ||
                     s.field->field_width != geometry_.field.field_width)) {
       geometry_.field = *s.field;
-      geometry_.cameras = context_->Cameras();
+      changed = true;
+    }
+    // The cameras as reported: a new field brings its own, and the league's camera_position_error
+    // (a realism setting, changeable at any time) moves the positions in the calibration.
+    std::vector<ubersim::CameraInfo> cameras = context_->Cameras();
+    if (!SameCameras(cameras, geometry_.cameras)) {
+      geometry_.cameras = std::move(cameras);
       changed = true;
     }
     if (changed) {

@@ -44,6 +44,7 @@ SSL_WrapperPacket DetectionPacket(const VisionFrame& frame, transport::WireClock
   for (const DetectedBall& b : frame.balls) {
     SSL_DetectionBall* out = d->add_balls();
     out->set_confidence(static_cast<float>(b.confidence));
+    out->set_area(transport::WholePixels(b.area));  // the blob in the image, whole pixels
     out->set_x(static_cast<float>(MetresToMm(b.x)));
     out->set_y(static_cast<float>(MetresToMm(b.y)));
     const auto [px, py] = pixel(b.x, b.y);

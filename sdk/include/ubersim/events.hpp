@@ -176,6 +176,15 @@ struct RealismEvent {
   std::optional<double> camera_overlap;           ///< how far a camera sees past its part, m
   std::optional<double> radio_latency;            ///< command arrival to effect, s
   std::optional<double> radio_loss;               ///< probability a command is lost
+  std::optional<double> radio_response_loss;      ///< probability a robot's feedback is lost
+  std::optional<bool> ball_occlusion;             ///< robots between ball and camera hide (part of) it
+  std::optional<double> ball_visibility_threshold;  ///< visible fraction below which the ball is not reported
+  std::optional<double> ball_area_noise;          ///< σ on the ball blob's area, pixels
+  std::optional<double> dribbler_false_balls;     ///< false ball detections at a dribbler corner, 1/s per robot
+  std::optional<double> camera_position_error;    ///< m, in the reported camera positions only
+  std::optional<double> object_offset;            ///< m, systematic offset of reported positions
+  std::optional<double> processing_time;          ///< t_sent − t_capture in the frames, s
+  std::optional<bool> held_ball;                  ///< dribblers hold the ball by a constraint (no slipping)
 };
 
 /// Any event a transport or tool can post to the kernel.

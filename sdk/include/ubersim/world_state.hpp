@@ -26,6 +26,7 @@ struct RobotState {
   Twist twist;                    ///< chassis velocity, world
   bool dribbler_ball_contact = false;  ///< the dribbler touches the ball
   bool kicker_ready = false;      ///< the kicker is charged
+  bool feedback_lost = false;     ///< the radio lost this robot's feedback to its team this step
   double radius = 0.09;           ///< m
   double height = 0.15;           ///< m
   std::optional<DriveFeedback> drive;  ///< the drive's Feedback(); none off the field or without a working drive
@@ -92,6 +93,7 @@ struct DetectedRobot {
 struct DetectedBall {
   double x = 0, y = 0, z = 0;  ///< m; z is 0 for a projected ball
   double confidence = 1.0;     ///< 0..1
+  double area = 0.0;           ///< the blob's area in the camera image, pixels (0: not modelled)
 };
 
 /// What one camera reports for one frame, after noise, drop-outs and latency.

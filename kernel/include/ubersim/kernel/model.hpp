@@ -74,6 +74,20 @@ struct PerceptionModel {
   double robot_drop = 0.0;               ///< probability a camera frame misses a robot
   double camera_overlap = 0.3;           ///< each camera sees this far past its part, m
   std::vector<CameraModel> cameras;      ///< at least one
+  // The league's realism (reference/ssl-protocols.md §6.1, RealismConfigErForce):
+  bool ball_occlusion = false;             ///< robots between the ball and a camera hide (part of) it
+  double ball_visibility_threshold = 0.4;  ///< with occlusion: below this visible fraction, no ball (0: always)
+  double ball_area_sigma = 0.0;            ///< σ on the ball blob's area, pixels
+  double dribbler_false_balls = 0.0;       ///< false ball detections at a dribbler corner, 1/s per robot
+  double camera_position_error = 0.0;      ///< m, added to the reported camera positions only
+  double object_offset = 0.0;              ///< m, reported positions shifted away from the centre towards the camera
+  /// t_sent − t_capture as the frames report it, s; unset: the latency (the capture time is true).
+  std::optional<double> processing_time;
+  // Beyond the league's presets (docs/interfaces.md, reference/physics.md §4):
+  bool unsynchronised_cameras = false;     ///< each camera its own frame phase, as on a real field
+  double capture_jitter = 0.0;             ///< σ of each capture's time about its schedule, s
+  double noise_growth = 0.0;               ///< noise σ grows by this fraction per metre from the camera's nadir, 1/m
+  double exposure = 0.0;                   ///< s: a moving ball's blob smears along its motion over it
 };
 
 /// The radio between the teams' software and the robots (the `radio:` block, presets resolved).
@@ -81,6 +95,7 @@ struct RadioModel {
   std::string preset = "ideal";  ///< ideal, 2003 or realistic
   double latency = 0.0;          ///< from arrival to taking effect, s
   double loss = 0.0;             ///< probability a command is lost
+  double response_loss = 0.0;    ///< probability a robot's feedback to its team is lost
 };
 
 /// Defaults of a preset ("ideal", "2003", "realistic"); false for an unknown name.
@@ -88,11 +103,10 @@ bool PerceptionPreset(const std::string& name, PerceptionModel& model);
 /// Defaults of a radio preset; false for an unknown name.
 bool RadioPreset(const std::string& name, RadioModel& model);
 /// The league's realism presets as the ER-Force simulator names them (None, Friendly, RC2021,
-/// Realistic; any case), put over `vision` and `radio`: noise, drop-outs, overlap, latency,
-/// command delay and loss. Frame rate and cameras stay. What the preset asks for that ÜberSim does
-/// not model goes to `unmodelled`, one entry each. False for an unknown name.
-bool LeagueRealismPreset(const std::string& name, PerceptionModel& vision, RadioModel& radio,
-                         std::vector<std::string>& unmodelled);
+/// Realistic; any case), every field of RealismConfigErForce exactly, put over `vision`, `radio`
+/// and `held_ball` (simulate_dribbling false). Frame rate, cameras and ÜberSim's own settings
+/// stay. False for an unknown name.
+bool LeagueRealismPreset(const std::string& name, PerceptionModel& vision, RadioModel& radio, bool& held_ball);
 /// The league's preset names, for messages: "None, Friendly, RC2021, Realistic".
 const char* LeagueRealismPresetNames();
 
@@ -276,6 +290,9 @@ struct WorldModel {
   std::array<std::shared_ptr<const RobotModel>, 2> team_models;
   /// Every transport on loopback only (`local_only: true`, `ubersim run --local-only`).
   bool local_only = false;
+  /// Dribblers hold the ball by a constraint once they touch it, as ER-Force's "perfect
+  /// dribbling" (`dribbling: held`; the league's RC2021 preset); false: by contact friction.
+  bool held_ball = false;
   /// The world file's `match:` block (referee, tracker, match length; docs/match.md), checked
   /// against the schema and read by the apps that run a match; empty when absent.
   ParamView match;

@@ -115,6 +115,8 @@ struct SavedState {
   std::vector<SavedRobot> robots;     ///< the world's order
   PerceptionState perception;         ///< cameras' schedule, frames in flight, noise generator
   RadioState radio;                   ///< commands in flight, loss generator
+  bool held_ball = false;             ///< dribblers hold the ball (the world file, realism events)
+  std::optional<RobotId> ball_held_by;  ///< the robot holding the ball then
   std::vector<PluginFault> faults;    ///< every fault so far
   std::vector<std::pair<RobotId, RobotSpec>> robot_specs;  ///< robot specs announced while running
 };

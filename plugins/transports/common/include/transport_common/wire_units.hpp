@@ -33,6 +33,15 @@ inline std::int32_t MetresToWholeMm(double m) {
   return static_cast<std::int32_t>(mm < lo ? lo : (mm > hi ? hi : mm));
 }
 
+/// A blob area in pixels → the uint32 `area` of SSL_DetectionBall: rounded to nearest, clamped
+/// to the uint32 range (NaN gives 0).
+inline std::uint32_t WholePixels(double px) {
+  const double r = std::round(px);
+  if (!(r > 0)) return 0;  // also NaN
+  constexpr double hi = std::numeric_limits<std::uint32_t>::max();
+  return static_cast<std::uint32_t>(r > hi ? hi : r);
+}
+
 /// Simulated ns → s.
 constexpr double NsToSeconds(std::int64_t ns) { return static_cast<double>(ns) * 1e-9; }
 
