@@ -299,6 +299,68 @@ TEST_F(Loader, RobotComponentsCarryTheirOwnParameters) {
   EXPECT_DOUBLE_EQ(r->kicker->params["max_flat_speed"].AsDouble(), 6.5);
 }
 
+TEST_F(Loader, ALeaguePresetSetsEveryRealismFieldAndTheWorldsKeysWin) {
+  Write("fields/f.yaml", kField);
+  const std::string head = "kind: world\nname: w\nfield: ../fields/f.yaml\nball: " + (kModels / "balls/golf.yaml").string() + "\n";
+  // RC2021 exactly (reference/ssl-protocols.md §6.1), the held ball with it.
+  const auto rc = loader_.LoadWorld(Write("worlds/rc.yaml", head + "realism: RC2021\n"));
+  EXPECT_DOUBLE_EQ(rc.perception.ball_position_sigma, 0.0010);
+  EXPECT_DOUBLE_EQ(rc.perception.robot_position_sigma, 0.0013);
+  EXPECT_DOUBLE_EQ(rc.perception.robot_orientation_sigma, 0.01);
+  EXPECT_DOUBLE_EQ(rc.perception.ball_area_sigma, 6.5);
+  EXPECT_TRUE(rc.perception.ball_occlusion);
+  EXPECT_DOUBLE_EQ(rc.perception.ball_visibility_threshold, 0.4);
+  EXPECT_DOUBLE_EQ(rc.perception.camera_overlap, 1.0);
+  EXPECT_DOUBLE_EQ(rc.perception.dribbler_false_balls, 0.02);
+  EXPECT_DOUBLE_EQ(rc.perception.camera_position_error, 0.0);
+  EXPECT_DOUBLE_EQ(rc.perception.ball_drop, 0.05);
+  EXPECT_DOUBLE_EQ(rc.perception.robot_drop, 0.0);
+  EXPECT_DOUBLE_EQ(rc.perception.latency, 0.035);
+  ASSERT_TRUE(rc.perception.processing_time.has_value());
+  EXPECT_DOUBLE_EQ(*rc.perception.processing_time, 0.010);
+  EXPECT_DOUBLE_EQ(rc.perception.object_offset, 0.0);
+  EXPECT_DOUBLE_EQ(rc.radio.loss, 0.03);
+  EXPECT_DOUBLE_EQ(rc.radio.response_loss, 0.1);
+  EXPECT_DOUBLE_EQ(rc.radio.latency, 0.0);
+  EXPECT_TRUE(rc.held_ball);
+  // Realistic: the offsets and the command delay; dribbling physical.
+  const auto real = loader_.LoadWorld(Write("worlds/real.yaml", head + "realism: Realistic\n"));
+  EXPECT_DOUBLE_EQ(real.perception.camera_position_error, 0.1);
+  EXPECT_DOUBLE_EQ(real.perception.object_offset, 0.02);
+  EXPECT_DOUBLE_EQ(real.perception.robot_drop, 0.02);
+  EXPECT_DOUBLE_EQ(real.radio.latency, 0.003);
+  EXPECT_FALSE(real.held_ball);
+  // The world's own keys over the league's preset, and ÜberSim's own settings.
+  const auto mine = loader_.LoadWorld(Write("worlds/mine.yaml", head +
+      "realism: RC2021\ndribbling: physical\n"
+      "perception: {noise: {ball_position: 0.002, ball_area: 3, growth_per_metre: 0.2}, occlusion: {enabled: false,"
+      " visibility_threshold: 0.6}, dribbler_false_balls: 0.5, camera_position_error: 0.05, object_offset: 0.01,"
+      " processing_time: 0.004, unsynchronised_cameras: true, capture_jitter: 0.001, exposure: 0.003}\n"
+      "radio: {response_loss: 0.2}\n"));
+  EXPECT_DOUBLE_EQ(mine.perception.ball_position_sigma, 0.002);
+  EXPECT_DOUBLE_EQ(mine.perception.robot_position_sigma, 0.0013);  // the preset's
+  EXPECT_DOUBLE_EQ(mine.perception.ball_area_sigma, 3);
+  EXPECT_DOUBLE_EQ(mine.perception.noise_growth, 0.2);
+  EXPECT_FALSE(mine.perception.ball_occlusion);
+  EXPECT_DOUBLE_EQ(mine.perception.ball_visibility_threshold, 0.6);
+  EXPECT_DOUBLE_EQ(mine.perception.dribbler_false_balls, 0.5);
+  EXPECT_DOUBLE_EQ(mine.perception.camera_position_error, 0.05);
+  EXPECT_DOUBLE_EQ(mine.perception.object_offset, 0.01);
+  EXPECT_DOUBLE_EQ(*mine.perception.processing_time, 0.004);
+  EXPECT_TRUE(mine.perception.unsynchronised_cameras);
+  EXPECT_DOUBLE_EQ(mine.perception.capture_jitter, 0.001);
+  EXPECT_DOUBLE_EQ(mine.perception.exposure, 0.003);
+  EXPECT_DOUBLE_EQ(mine.radio.response_loss, 0.2);
+  EXPECT_FALSE(mine.held_ball);
+  // A name that is not a league preset is an error at its key.
+  try {
+    loader_.LoadWorld(Write("worlds/bad.yaml", head + "realism: RC2022\n"));
+    FAIL() << "RC2022 accepted";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("realism"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(Loader, WorldRobotsShareTheirModelAndResolveRelativePaths) {
   Write("robots/r.yaml", kRobot);
   const auto world = Write("worlds/w.yaml",
