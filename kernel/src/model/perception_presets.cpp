@@ -130,6 +130,12 @@ bool LeagueRealismPreset(const std::string& name, PerceptionModel& vision, Radio
     radio.response_loss = p.response_loss;
     radio.latency = p.command_delay;
     held_ball = !p.simulate_dribbling;
+    // What only ÜberSim models is off: the league's preset is ER-Force's simulator exactly (a
+    // world file's own keys may turn it on again).
+    vision.unsynchronised_cameras = false;
+    vision.capture_jitter = 0.0;
+    vision.noise_growth = 0.0;
+    vision.exposure = 0.0;
     return true;
   }
   return false;

@@ -44,7 +44,9 @@ RunStatus RunWorld(World& world, const RunOptions& options, const std::atomic<bo
     if (control.paused && control.pending_steps == 0) {
       world.ProcessEvents();
       pacer.Reanchor();
-      world.events().WaitForEvent(std::chrono::milliseconds(20));
+      // The events just processed may have asked for steps (a synchronous client): run them at
+      // once rather than after the wait.
+      if (control.pending_steps == 0) world.events().WaitForEvent(std::chrono::milliseconds(20));
       continue;
     }
     const bool single_step = control.paused && control.pending_steps > 0;

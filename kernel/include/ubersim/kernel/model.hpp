@@ -104,8 +104,9 @@ bool PerceptionPreset(const std::string& name, PerceptionModel& model);
 bool RadioPreset(const std::string& name, RadioModel& model);
 /// The league's realism presets as the ER-Force simulator names them (None, Friendly, RC2021,
 /// Realistic; any case), every field of RealismConfigErForce exactly, put over `vision`, `radio`
-/// and `held_ball` (simulate_dribbling false). Frame rate, cameras and ÜberSim's own settings
-/// stay. False for an unknown name.
+/// and `held_ball` (simulate_dribbling false). Frame rate and cameras stay; what only ÜberSim
+/// models (unsynchronised cameras, capture jitter, noise growth, exposure) is switched off, so
+/// the vision is ER-Force's exactly. False for an unknown name.
 bool LeagueRealismPreset(const std::string& name, PerceptionModel& vision, RadioModel& radio, bool& held_ball);
 /// The league's preset names, for messages: "None, Friendly, RC2021, Realistic".
 const char* LeagueRealismPresetNames();
