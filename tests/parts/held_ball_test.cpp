@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../common/edited_model_file.hpp"
 #include "parts_world.hpp"
 #include "ubersim/kernel/snapshot.hpp"
 #include "world/world_attorney.hpp"
@@ -40,6 +41,17 @@ TEST_P(HeldBall, TheBallStaysThroughAFastSpinThatARollerLosesItIn) {
       EXPECT_GT(FromMouth(w), 0.05) << "by friction alone a 10 rad/s spin loses it (the roller's own test)";
     }
   }
+}
+
+TEST_P(HeldBall, ARobotFileMayHoldTheBallInAPhysicalWorld) {
+  static const std::string held_robot =
+      testing::EditedModelFile(kModernRobot, "kind: robot", "kind: robot\ndribbling: held", "ubersim-held-robot");
+  PartsWorld w(GetParam(), held_robot, false);
+  w.Run(0.2);
+  w.PlaceBallInMouth();
+  w.Run(0.3, std::nullopt, std::nullopt, kDribble);
+  w.Run(1.0, LocalVelocityCommand{0, 0, 10.0}, std::nullopt, kDribble);
+  EXPECT_LT(FromMouth(w), 0.01);
 }
 
 TEST_P(HeldBall, AKickLetsGoAndTheBallLeavesAtTheKickSpeed) {

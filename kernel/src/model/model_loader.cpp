@@ -422,6 +422,7 @@ struct ModelLoader::Impl {
       }
     }
     r->min_solver_iterations = static_cast<int>(v.GetInt("min_solver_iterations", 0));
+    if (v.Has("dribbling")) r->held_ball = v.GetString("dribbling", "physical") == "held";
     r->source = v;
     r->surface = ReadSurface(v, "surface", "robot");
     r->drive = Component(v, "drive", PluginKind::kDrive);

@@ -598,18 +598,16 @@ constexpr std::int64_t kKickedBallFreeNs = 100'000'000;
 }  // namespace
 
 void WorldImpl::UpdateHeldBall() {
-  if (!held_ball_) {
-    held_.Release();
-    return;
-  }
+  // A robot's own `dribbling:` over the world's.
+  const auto holds = [this](const Robot& r) { return r.model().held_ball.value_or(held_ball_); };
   if (const std::optional<RobotId>& id = held_.holder()) {
     const Robot* r = FindRobot(*id);
-    if (!r || !r->present() || r->dribbler_speed() <= 0) held_.Release();
+    if (!r || !holds(*r) || !r->present() || r->dribbler_speed() <= 0) held_.Release();
     return;
   }
   if (sim_time_ns_ < hold_after_ns_) return;  // a kicked ball gets away first
   for (const auto& r : robots_) {
-    if (r->present() && r->dribbler_speed() > 0 && r->TouchesBall()) {
+    if (holds(*r) && r->present() && r->dribbler_speed() > 0 && r->TouchesBall()) {
       held_.Attach(world_.get(), r->id(), r->chassis().id(), ball_->id());
       return;
     }

@@ -176,6 +176,8 @@ struct RobotModel {
   /// QuickStep iterations at least for the islands this robot is in (0: the world's count); a
   /// drive that needs more than the fast profile's 2 for islands without the ball asks here.
   int min_solver_iterations = 0;
+  /// The robot file's `dribbling:` (true held, false physical); none: the world's.
+  std::optional<bool> held_ball;
   ParamView source;                        ///< the file's tree as read (robot specs edit a copy)
 };
 
