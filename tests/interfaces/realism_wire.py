@@ -125,7 +125,28 @@ class Frame:
         return out
 
 
-class SyncWorld:
+class _Session:
+    """A simulator with the sockets a test opened to it: closed together, also as a context manager."""
+
+    def _sockets(self):
+        return ()
+
+    def close(self):
+        for sock in self._sockets():
+            if sock:
+                sock.close()
+        self.sim.close()
+        self.receiver.close()
+
+    def __enter__(self):
+        return self.start()
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+
+class SyncWorld(_Session):
     """`ubersim run COPY --realism PRESET --local-only` with the synchronous mode on: every request
     steps the world and the frames it released are collected from the multicast group."""
 
@@ -162,20 +183,8 @@ class SyncWorld:
             raise
         return self
 
-    def close(self):
-        if self.client:
-            self.client.close()
-        if self.team:
-            self.team.close()
-        self.sim.close()
-        self.receiver.close()
-
-    def __enter__(self):
-        return self.start()
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
+    def _sockets(self):
+        return (self.client, self.team)
 
     def command_line(self):
         return "ubersim run <copy of models/worlds/%s.yaml> --realism %s --local-only" % (
@@ -678,7 +687,7 @@ def measure_two_cameras(world, seconds):
     return out
 
 
-class RealTimeWorld:
+class RealTimeWorld(_Session):
     """`ubersim run COPY --realism PRESET --local-only` in real time (no synchronous mode): the
     datagrams' arrival against the wall clock."""
 
@@ -701,18 +710,8 @@ class RealTimeWorld:
             raise
         return self
 
-    def close(self):
-        if self.client:
-            self.client.close()
-        self.sim.close()
-        self.receiver.close()
-
-    def __enter__(self):
-        return self.start()
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
+    def _sockets(self):
+        return (self.client,)
 
     def next_detection(self, timeout=10.0):
         """The next detection frame: (Unix arrival time, SSL_DetectionFrame)."""
