@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "shared/trial_world.hpp"
+#include "ubersim/kernel/snapshot.hpp"
 
 namespace ubersim::python {
 
@@ -83,6 +84,21 @@ py::dict FieldDict(const FieldGeometry& f) {
   d["lines"] = lines;
   d["arcs"] = arcs;
   return d;
+}
+
+py::bytes SaveWorld(const kernel::World& world) {
+  std::string bytes;
+  {
+    OdeSection ode;
+    bytes = kernel::EncodeSnapshot(world.Save());
+  }
+  return py::bytes(bytes);  // with the GIL again
+}
+
+void RestoreWorld(kernel::World& world, const std::string& bytes) {
+  const kernel::SavedState state = kernel::DecodeSnapshot(bytes, "the snapshot given to restore");
+  OdeSection ode;
+  world.Restore(state);
 }
 
 std::mutex& OdeMutex() {

@@ -38,4 +38,16 @@ py::dict FieldDict(const FieldGeometry& field);
 /// process-wide, so worlds of two threads step one after the other (docs/python.md).
 std::mutex& OdeMutex();
 
+/// A stretch of code that calls into ODE: releases the GIL, then takes OdeMutex (in that order: a
+/// thread waiting for ODE must not hold the GIL the stepping thread may need).
+struct OdeSection {
+  py::gil_scoped_release release;
+  std::lock_guard<std::mutex> ode{OdeMutex()};
+};
+
+/// `world`'s full state as snapshot bytes (the format of `ubersim run --snapshot-out`).
+py::bytes SaveWorld(const kernel::World& world);
+/// Puts snapshot `bytes` back into `world`; throws SnapshotError when they are not its snapshot.
+void RestoreWorld(kernel::World& world, const std::string& bytes);
+
 }  // namespace ubersim::python

@@ -37,13 +37,6 @@ Team TeamOf(const std::string& name) {
   throw py::value_error("team must be 'blue' or 'yellow', not '" + name + "'");
 }
 
-// Releases the GIL, then takes the process's ODE lock (in that order: a thread waiting for ODE
-// must not hold the GIL the stepping thread may need).
-struct OdeSection {
-  py::gil_scoped_release release;
-  std::lock_guard<std::mutex> ode{OdeMutex()};
-};
-
 // One world with what it was loaded with (the registry outlives the world: its plugins' code).
 class PyWorld {
  public:
@@ -166,19 +159,10 @@ class PyWorld {
     world_->ProcessEvents();
   }
 
-  py::bytes Save() const {
-    std::string bytes;
-    {
-      OdeSection ode;
-      bytes = kernel::EncodeSnapshot(world_->Save());
-    }
-    return py::bytes(bytes);
-  }
+  py::bytes Save() const { return SaveWorld(*world_); }
   void Restore(const std::string& bytes) {
-    const kernel::SavedState state = kernel::DecodeSnapshot(bytes, "the snapshot given to restore");
-    OdeSection ode;
-    random_play_.reset();
-    world_->Restore(state);
+    random_play_.reset();  // its schedule is of the state left behind
+    RestoreWorld(*world_, bytes);
   }
   std::string LogText() const { return log_text_.str(); }
 

@@ -9,7 +9,6 @@
 #include <string>
 
 #include "module_common.hpp"
-#include "ubersim/kernel/snapshot.hpp"
 #include "vector_worlds.hpp"
 
 namespace ubersim::python {
@@ -40,12 +39,6 @@ void ExpectShape(const py::array& a, std::initializer_list<py::ssize_t> shape, c
                           ", not " + std::string(py::str(a.dtype())) + " " + got);
   }
 }
-
-// The lock order of module_common: the GIL released first, then ODE's lock taken.
-struct OdeSection {
-  py::gil_scoped_release release;
-  std::lock_guard<std::mutex> ode{OdeMutex()};
-};
 
 class PyVectorWorlds {
  public:
@@ -169,18 +162,13 @@ class PyVectorWorlds {
   }
   py::bytes Save(int k) {
     Check(k);
-    std::string bytes;
-    {
-      OdeSection ode;
-      bytes = kernel::EncodeSnapshot(core_->world(k).Save());
-    }
-    return py::bytes(bytes);
+    return SaveWorld(core_->world(k));
   }
   void Restore(int k, const std::string& bytes) {
     Check(k);
-    const kernel::SavedState state = kernel::DecodeSnapshot(bytes, "the snapshot given to restore");
+    RestoreWorld(core_->world(k), bytes);
     OdeSection ode;
-    core_->world(k).Restore(state);
+    core_->RefreshPresence(k);
   }
 
  private:

@@ -55,6 +55,7 @@ VectorWorlds::VectorWorlds(apps::LoadedWorld loaded, const VectorWorldsOptions& 
   for (auto& w : worlds_) {
     Instance* at = w.get();
     at->robots_seen.assign(slots_.size(), {});
+    at->present.assign(slots_.size(), false);
     at->robots_last.assign(slots_.size(), {});
     if (options_.camera_features) {
       at->world->SetVisionObserver([this, at](const VisionFrame& frame) {
@@ -74,6 +75,19 @@ VectorWorlds::VectorWorlds(apps::LoadedWorld loaded, const VectorWorldsOptions& 
       });
     }
     StartDrivers(*w, loaded_.model.seed);
+    RefreshPresence(*w);  // what the first actions are sent by
+  }
+}
+
+void VectorWorlds::RefreshPresence(int index) { RefreshPresence(*worlds_.at(static_cast<std::size_t>(index))); }
+
+void VectorWorlds::RefreshPresence(Instance& w) {
+  const WorldSnapshot s = w.world->GroundTruth();
+  for (std::size_t i = 0; i < slots_.size(); ++i) {
+    w.present[i] = false;
+    for (const RobotState& r : s.robots) {
+      if (r.id == slots_[i]) w.present[i] = r.present;
+    }
   }
 }
 
@@ -151,12 +165,11 @@ void VectorWorlds::Reset(int index, std::uint64_t seed, const EpisodeStart& star
 }
 
 void VectorWorlds::SendActions(Instance& w, const float* actions) {
-  if (controlled_.empty()) return;
-  const WorldSnapshot now = w.world->GroundTruth();
   for (std::size_t c = 0; c < controlled_.size(); ++c) {
     const auto slot = static_cast<std::size_t>(controlled_[c]);
     // A robot that is off the field gets nothing: the world would refuse it and log each one.
-    if (slot >= now.robots.size() || !now.robots[slot].present) continue;
+    // (Teleports happen only in Reset, which observes: the last observation's presence holds.)
+    if (!w.present[slot]) continue;
     const float* a = actions + c * action::kCount;
     CommandEvent e;
     e.robot = slots_[slot];
@@ -205,7 +218,8 @@ void VectorWorlds::ObserveOne(Instance& w, float* obs) {
         if (other.id == slots_[i]) r = &other;
       }
     }
-    if (r && r->present) {
+    w.present[i] = r && r->present;
+    if (w.present[i]) {
       const double yaw = r->pose.Yaw();
       row[f::kPresent] = 1.0f;
       row[f::kX] = static_cast<float>(r->pose.position.x());

@@ -96,6 +96,9 @@ class VectorWorlds {
   /// The observation of every world now, into `obs`.
   void Observe(float* obs);
 
+  /// Reads again which robots of world `index` are on the field (after a restore: the actions are
+  /// sent only to those, by what the last observation saw).
+  void RefreshPresence(int index);
   /// World `index` (its state hash, ground truth, save, restore).
   World& world(int index) { return *worlds_[static_cast<std::size_t>(index)]->world; }
   /// Physics steps taken by all worlds together since construction.
@@ -110,12 +113,14 @@ class VectorWorlds {
     std::unique_ptr<World> world;
     std::unique_ptr<apps::RandomPlay> random_play;
     std::vector<ScriptedTeam> scripted;
+    std::vector<bool> present;      // per slot, as the last observation saw it
     std::vector<Seen> robots_seen;  // per slot, since the last observation
     Seen ball_seen;
     std::vector<Seen> robots_last;  // the last report of each slot
     Seen ball_last;
   };
   void StartDrivers(Instance& w, std::uint64_t seed);
+  void RefreshPresence(Instance& w);
   void ObserveOne(Instance& w, float* obs);
   void SendActions(Instance& w, const float* actions);
 

@@ -334,3 +334,17 @@ def test_observations_are_copies_unless_asked_for_the_buffer():
     first, _ = shared.reset(seed=0)
     second, *_ = shared.step(np.zeros(shared.action_space.shape, np.float32))
     assert first is second and np.array_equal(first, second)
+
+
+def test_after_a_restore_the_actions_reach_the_robots_the_snapshot_has_on_the_field():
+    full = ubersim.VectorEnv("div-b", 1, seed=0)  # every robot on the field
+    full.reset(seed=0)
+    alone = ubersim.VectorEnv("div-b", 1, task=tasks.GoToBall(), seed=0)  # blue 0 alone
+    obs, _ = alone.reset(seed=0)
+    assert obs[0, 1, F["present"]] == 0.0
+    alone.worlds.restore(0, full.worlds.save(0))
+    action = np.zeros(alone.action_space.shape, np.float32)
+    action[0, 1, A["forward"]] = 1.0  # blue 1, off the field before the restore
+    for _ in range(20):
+        obs, *_ = alone.step(action)
+    assert obs[0, 1, F["present"]] == 1.0 and np.hypot(obs[0, 1, F["vx"]], obs[0, 1, F["vy"]]) > 0.5
