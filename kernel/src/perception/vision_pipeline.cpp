@@ -26,8 +26,12 @@ constexpr std::uint64_t kPhaseStream = 0x5048415345000003ULL;
 // The camera lens's focal length in pixels that ER-Force's simulator computes the ball blob's
 // area with (reference/ssl-protocols.md §6.2).
 constexpr double kFocalLengthPx = 390.0;
-// The direction the league's camera_position_error offsets reported camera positions in (§6.1).
-const Vec3 kCameraErrorDirection = Vec3(0.3, 0.7, 0.05).normalized();
+
+// The area in pixels of a whole ball of `radius` at `at`, seen by a camera at `camera`.
+double BallDiscArea(const Vec3& camera, const Vec3& at, double radius) {
+  const double disc_px = kFocalLengthPx * radius / std::max(0.1, (camera - at).norm());
+  return M_PI * disc_px * disc_px;
+}
 
 }  // namespace
 
@@ -123,6 +127,12 @@ void PerceptionPipeline::Capture(const WorldSnapshot& truth, const std::vector<d
     in_flight_.insert(at, std::move(f));
     next_capture_ns_[c] = NextCapture(c, truth.sim_time_ns);
   }
+}
+
+Vec3 ReportedCameraPosition(const PerceptionModel& model, const CameraModel& camera) {
+  // The direction the league's camera_position_error offsets the positions in (§6.1).
+  static const Vec3 direction = Vec3(0.3, 0.7, 0.05).normalized();
+  return camera.position + model.camera_position_error * direction;
 }
 
 PerceptionState PerceptionPipeline::SaveState() const {
@@ -236,9 +246,9 @@ VisionFrame PerceptionPipeline::Frame(std::size_t index, const WorldSnapshot& tr
       d.z = 0.0;
       // The blob: the ball's disc at its distance from the camera, the part of it seen, longer by
       // the smear, with noise.
-      const double disc_px = kFocalLengthPx * b.radius / std::max(0.1, (cam.position - b.pose.position).norm());
       const double smear = 1.0 + 2.0 * travel.head<2>().norm() / (M_PI * b.radius);
-      d.area = std::max(0.0, M_PI * disc_px * disc_px * seen.fraction * smear + model_.ball_area_sigma * area_noise);
+      d.area = std::max(0.0, BallDiscArea(cam.position, b.pose.position, b.radius) * seen.fraction * smear +
+                                 model_.ball_area_sigma * area_noise);
       f.balls.push_back(d);
     }
   }
@@ -260,8 +270,7 @@ VisionFrame PerceptionPipeline::Frame(std::size_t index, const WorldSnapshot& tr
       DetectedBall d;
       d.x = r.pose.position.x() + front * std::cos(yaw) - side * std::sin(yaw) + offset.x();
       d.y = r.pose.position.y() + front * std::sin(yaw) + side * std::cos(yaw) + offset.y();
-      const double disc_px = kFocalLengthPx * b.radius / std::max(0.1, (cam.position - r.pose.position).norm());
-      d.area = M_PI * disc_px * disc_px;
+      d.area = BallDiscArea(cam.position, r.pose.position, b.radius);
       f.balls.push_back(d);
     }
     if (lost) continue;

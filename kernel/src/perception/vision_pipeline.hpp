@@ -67,4 +67,8 @@ class PerceptionPipeline {
   std::mt19937_64 rng_;
 };
 
+/// Where the geometry reports `camera`: its position with the league's camera_position_error
+/// (projection uses the true one).
+Vec3 ReportedCameraPosition(const PerceptionModel& model, const CameraModel& camera);
+
 }  // namespace ubersim::kernel

@@ -60,10 +60,8 @@ class TransportHost final : public TransportContext {
   const std::string& WorldName() const override { return world_name_; }
   std::vector<CameraInfo> Cameras() const override {
     std::vector<CameraInfo> out;
-    // The positions reported, with the league's camera_position_error (projection uses the true ones).
     const PerceptionModel& vision = world_.perception();
-    const Vec3 error = vision.camera_position_error * Vec3(0.3, 0.7, 0.05).normalized();
-    for (const CameraModel& c : vision.cameras) out.push_back(CameraInfo{c.id, c.position + error});
+    for (const CameraModel& c : vision.cameras) out.push_back(CameraInfo{c.id, ReportedCameraPosition(vision, c)});
     return out;
   }
   bool LocalOnly() const override { return world_.model().local_only; }
