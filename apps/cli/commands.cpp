@@ -34,6 +34,7 @@ const std::vector<Command>& Commands() {
       {"soak", "[WORLD]", "run a world for long under random play and teleports, checking its state", SoakCommand},
       {"match", "[WORLD] --yellow CMD --blue CMD", "a refereed match between two teams' programs; writes the result as JSON", MatchCommand},
       {"replay", "FILE", "play an SSL log file (.log, .log.gz) onto the league's multicast groups", ReplayCommand},
+      {"calibrate", "LOG…", "fit ball, robot and camera models to a field's SSL log; writes model files and a report", CalibrateCommand},
       {"--help", "", nullptr, HelpCommand},
       {"-h", "", nullptr, HelpCommand},
       {"help", "", nullptr, HelpCommand},

@@ -47,6 +47,8 @@ int SoakCommand(const std::vector<std::string>& args);
 int MatchCommand(const std::vector<std::string>& args);
 /// `ubersim replay FILE`: plays an SSL log file onto the league's multicast groups (replay_command.cpp).
 int ReplayCommand(const std::vector<std::string>& args);
+/// `ubersim calibrate LOG…`: fits model files to a field's log (calibrate_command.cpp).
+int CalibrateCommand(const std::vector<std::string>& args);
 /// `ubersim --help`: prints TopHelp (commands.cpp).
 int HelpCommand(const std::vector<std::string>& args);
 /// `ubersim --version`: the version, the SDK's and the plugin ABI's (commands.cpp).

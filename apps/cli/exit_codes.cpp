@@ -69,7 +69,8 @@ const char* ExitCodesHelp() {
          "            5 a validated physics number outside its band, 6 soak: a state-check finding\n"
          "            or memory growth, 7 run: a plugin fault stopped the world (crash report\n"
          "            and snapshot written), 8 match: a team's program ended or stopped sending\n"
-         "            commands (the result file says which)\n";
+         "            commands (the result file says which), 9 calibrate: too little data in the log\n"
+         "            to fit anything (the report says what is missing)\n";
 }
 
 }  // namespace ubersim::cli

@@ -19,6 +19,7 @@ constexpr int kExitOutOfBand = 5;    ///< validate-physics: a number outside its
 constexpr int kExitSoakFailed = 6;   ///< soak: a state-check finding, or memory growth
 constexpr int kExitPluginFault = 7;  ///< run: a plugin fault stopped the world (crash report written)
 constexpr int kExitTeamFailed = 8;   ///< match: a team's program ended or stopped sending commands
+constexpr int kExitTooLittleData = 9;  ///< calibrate: the log holds too little of anything to fit
 
 /// A bad value on the command line, found while a command runs: exit code 2.
 class UsageError : public std::runtime_error {

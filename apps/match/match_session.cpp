@@ -91,6 +91,7 @@ MatchSession::~MatchSession() {
 
 std::int64_t MatchSession::UnixOffset() {
   if (!options_.unix_timestamps) return 0;
+  if (!unix_offset_ns_ && options_.unix_offset_ns) unix_offset_ns_ = options_.unix_offset_ns;
   if (!unix_offset_ns_) {
     // Anchored once: stamps keep the simulation's spacing exactly, also faster than real time.
     const auto now = std::chrono::system_clock::now().time_since_epoch();

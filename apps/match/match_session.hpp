@@ -45,6 +45,9 @@ struct MatchOptions {
   bool network = true;           ///< send on the network (false: only record / observe)
   bool local_only = false;       ///< loopback only
   bool unix_timestamps = true;   ///< time stamps in Unix time (else plain simulated time)
+  /// With unix_timestamps: Unix ns minus simulated ns, when the caller stamps records of its own on
+  /// the same clock; unset: anchored at the first stamp.
+  std::optional<std::int64_t> unix_offset_ns;
   MessageRecorder recorder;      ///< may be empty
 };
 

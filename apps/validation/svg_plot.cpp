@@ -123,9 +123,21 @@ std::string RenderSvg(const Plot& plot) {
     << "\" height=\"" << ph << "\"/></clipPath>\n<g clip-path=\"url(#area)\" fill=\"none\" stroke-width=\"2\">\n";
   for (std::size_t i = 0; i < plot.series.size(); ++i) {
     const Series& s = plot.series[i];
+    const std::size_t n = std::min(s.x.size(), s.y.size());
+    if (s.points) {
+      // One small dot per measurement: scattered data joined by a line reads as a trajectory.
+      o << "<g fill=\"" << kColours[i % 6] << "\" stroke=\"none\">\n";
+      for (std::size_t k = 0; k < n; ++k) {
+        if (!std::isfinite(s.x[k]) || !std::isfinite(s.y[k])) continue;
+        char buf[80];
+        std::snprintf(buf, sizeof buf, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"1.6\"/>\n", px(s.x[k]), py(s.y[k]));
+        o << buf;
+      }
+      o << "</g>\n";
+      continue;
+    }
     o << "<polyline stroke=\"" << kColours[i % 6] << "\"" << (s.dashed ? " stroke-dasharray=\"6 4\"" : "")
       << " points=\"";
-    const std::size_t n = std::min(s.x.size(), s.y.size());
     for (std::size_t k = 0; k < n; ++k) {
       if (!std::isfinite(s.x[k]) || !std::isfinite(s.y[k])) continue;
       char buf[48];
@@ -140,7 +152,8 @@ std::string RenderSvg(const Plot& plot) {
     const double y = kTop + 12 + 20.0 * static_cast<double>(i);
     o << "<line x1=\"" << kLeft + pw + 12 << "\" y1=\"" << y << "\" x2=\"" << kLeft + pw + 36 << "\" y2=\"" << y
       << "\" stroke=\"" << kColours[i % 6] << "\" stroke-width=\"2\""
-      << (plot.series[i].dashed ? " stroke-dasharray=\"6 4\"" : "") << "/>\n";
+      << (plot.series[i].dashed ? " stroke-dasharray=\"6 4\"" : "")
+      << (plot.series[i].points ? " stroke-dasharray=\"2 4\"" : "") << "/>\n";
     o << "<text x=\"" << kLeft + pw + 42 << "\" y=\"" << y + 4 << "\">" << Escape(plot.series[i].label)
       << "</text>\n";
   }

@@ -26,6 +26,7 @@ struct Series {
   std::vector<double> x;      ///< abscissae
   std::vector<double> y;      ///< ordinates, same length as x
   bool dashed = false;        ///< reference curves are dashed
+  bool points = false;        ///< measured data: a dot per point instead of a line
 };
 
 /// A line plot written as an SVG file.
