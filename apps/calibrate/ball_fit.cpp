@@ -30,6 +30,7 @@
 #include "ball_fit.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -62,6 +63,8 @@ constexpr double kMaxKickAge = 0.3;       // s, a kick older than this at the ru
 constexpr double kChipFirstWindow = 1.6;  // s, detections a chip trial first looks at
 constexpr double kChipRollOut = 0.4;      // s, rolling after the last landing a chip fit keeps
 constexpr double kChipGroundMargin = 0.15;  // s, after the last landing before a ground run may start
+constexpr double kChipGridGiveUp = 0.1;     // m, rms of the best launch on the grid above which no chip
+constexpr double kChipGoodEnough = 0.005;   // m, rms of a launch fit that needs no other start
 
 // Default globals: the league's (ssl-vision) models, where the fit starts and what unestimated
 // parameters are held at.
@@ -209,16 +212,35 @@ double NoiseOf(const std::vector<Vector2d>& e, const std::vector<char>& skip) {
   return c.size() < 20 ? 0.003 : std::max(1e-4, RobustSigma(std::move(c)));
 }
 
+// NeighbourResiduals with each camera's detections on their own: where cameras overlap they see an
+// airborne ball in different places (each along its own ray), and neither is a stray.
+std::vector<Vector2d> PerCameraResiduals(const std::vector<TrackPoint>& track, const std::vector<char>& skip) {
+  std::map<int, std::vector<std::size_t>> by_camera;
+  for (std::size_t i = 0; i < track.size(); ++i) by_camera[track[i].camera_id].push_back(i);
+  std::vector<Vector2d> e(track.size(), Vector2d(kNaN, kNaN));
+  for (const auto& [camera, idx] : by_camera) {
+    std::vector<TrackPoint> own;
+    std::vector<char> own_skip;
+    for (std::size_t i : idx) {
+      own.push_back(track[i]);
+      own_skip.push_back(skip[i]);
+    }
+    const std::vector<Vector2d> own_e = NeighbourResiduals(own, own_skip);
+    for (std::size_t k = 0; k < idx.size(); ++k) e[idx[k]] = own_e[k];
+  }
+  return e;
+}
+
 // Strays in two passes: the second with the first's strays out of the neighbours' fits, so that a
 // good detection next to a stray is not condemned with it. Sets marks.stray and marks.noise.
 void MarkStrays(const std::vector<TrackPoint>& track, TrackMarks& marks) {
   std::vector<char> none(track.size(), 0);
-  std::vector<Vector2d> e = NeighbourResiduals(track, none);
+  std::vector<Vector2d> e = PerCameraResiduals(track, none);
   marks.noise = NoiseOf(e, none);
   const double limit = std::max(kStrayFloor, kStraySigmas * marks.noise);
   std::vector<char> first(track.size(), 0);
   for (std::size_t i = 0; i < track.size(); ++i) first[i] = e[i].allFinite() && e[i].norm() > limit;
-  e = NeighbourResiduals(track, first);
+  e = PerCameraResiduals(track, first);
   marks.stray.assign(track.size(), 0);
   for (std::size_t i = 0; i < track.size(); ++i) {
     marks.stray[i] = e[i].allFinite() ? e[i].norm() > limit : first[i];
@@ -726,21 +748,56 @@ bool Converged(double gain, double cost, Eigen::Index residuals) {
   return gain <= 1e-3 * cost / static_cast<double>(std::max<Eigen::Index>(1, residuals)) + 1e-24;
 }
 
+double BlockCost(const BlockProblem& problem, std::size_t b, const VectorXd& globals, const VectorXd& local) {
+  static thread_local VectorXd r;
+  problem.Evaluate(static_cast<int>(b), globals, local, r, nullptr, nullptr);
+  return r.squaredNorm();
+}
+
+// The cost of a trial step, each block keeping its old parameters where the step made it worse:
+// a block at a kink of its model (a run switching to rolling) must not hold back all the others,
+// as one shared damping would make it.
+double TrialCost(const BlockProblem& problem, const Params& x, const std::vector<double>& costs, Params& trial,
+                 std::vector<double>& trial_costs, const Selection& sel) {
+  double total = 0;
+  for (std::size_t b = 0; b < sel.blocks.size(); ++b) {
+    if (!sel.blocks[b]) continue;
+    trial_costs[b] = BlockCost(problem, b, trial.globals, trial.locals[b]);
+    if (trial_costs[b] > costs[b]) {
+      const double kept = BlockCost(problem, b, trial.globals, x.locals[b]);
+      if (kept < trial_costs[b]) {
+        trial_costs[b] = kept;
+        trial.locals[b] = x.locals[b];
+      }
+    }
+    total += trial_costs[b];
+  }
+  return total;
+}
+
 // Levenberg–Marquardt on a block problem; returns the final cost.
 double Minimise(const BlockProblem& problem, Params& x, const Selection& sel, int max_iterations) {
-  double cost = Cost(problem, x, sel);
+  std::vector<double> costs(sel.blocks.size(), 0.0), trial_costs = costs;
+  double cost = 0;
+  for (std::size_t b = 0; b < sel.blocks.size(); ++b) {
+    if (sel.blocks[b]) cost += costs[b] = BlockCost(problem, b, x.globals, x.locals[b]);
+  }
   double lambda = 1e-3;
   for (int it = 0; it < max_iterations; ++it) {
     const NormalEquations ne = Linearize(problem, x, sel);
     bool better = false;
-    double gain = 0;
+    double gain = 0, moved = kInf;
     while (!better && lambda < 1e12) {
-      Params trial = Apply(problem, x, SolveStep(ne, lambda, sel), sel);
-      const double c = Cost(problem, trial, sel);
+      const Step step = SolveStep(ne, lambda, sel);
+      Params trial = Apply(problem, x, step, sel);
+      const double c = TrialCost(problem, x, costs, trial, trial_costs, sel);
       if (c < cost) {
         better = true;
         gain = cost - c;
+        moved = step.globals.dot(step.reduced * step.globals);
+        if (getenv("LMTRACE") && problem.Blocks() > 900) { std::size_t bb = 0; double bg = 0; for (std::size_t b = 0; b < costs.size(); ++b) if (sel.blocks[b] && costs[b] - trial_costs[b] > bg) { bg = costs[b] - trial_costs[b]; bb = b; } std::fprintf(stderr, "    best block %zu gain %.3g locals %.4f %.4f %.4f -> %.4f %.4f %.4f\n", bb, bg, x.locals[bb][0], x.locals[bb][1], x.locals[bb][2], trial.locals[bb][0], trial.locals[bb][1], trial.locals[bb][2]); }
         x = std::move(trial);
+        costs.swap(trial_costs);
         cost = c;
         lambda = std::max(lambda / 3, 1e-12);
       } else {
@@ -748,7 +805,11 @@ double Minimise(const BlockProblem& problem, Params& x, const Selection& sel, in
       }
     }
     if (getenv("LMTRACE") && problem.Blocks() > 900) std::fprintf(stderr, "  it %d cost %.6f gain %.3g lambda %.3g tol %.3g g %.4f %.4f %.4f\n", it, cost, gain, lambda, 1e-3 * cost / ne.residuals, x.globals[0], x.globals[1], x.globals[2]);
-    if (!better || Converged(gain, cost, ne.residuals)) { if (getenv("LMDEBUG")) std::fprintf(stderr, "LM blocks %d iterations %d lambda %g\n", problem.Blocks(), it + 1, lambda); return cost; }
+    // Done when the cost no longer falls, or the globals no longer move (by 0.1 % of their standard
+    // error): what is left is a run's own parameters creeping along a kink of its law.
+    const double sigma2 = cost / static_cast<double>(std::max<Eigen::Index>(1, ne.residuals));
+    const bool still = it >= 2 && x.globals.size() > 0 && moved < 1e-6 * sigma2;
+    if (!better || Converged(gain, cost, ne.residuals) || still) { if (getenv("LMDEBUG")) std::fprintf(stderr, "LM blocks %d iterations %d lambda %g\n", problem.Blocks(), it + 1, lambda); return cost; }
   }
   if (getenv("LMDEBUG")) std::fprintf(stderr, "LM blocks %d iterations MAX %d\n", problem.Blocks(), max_iterations);
   return cost;
@@ -944,23 +1005,24 @@ GroundData MakeGroundData(const std::vector<TrackPoint>& track, const TrackMarks
   return d;
 }
 
-// Sum of squares of a run that slides for `slide` s, with (s0, u0) by linear least squares.
+// Sum of squares of a run that slides for `slide` s, with (s0, u0) by linear least squares: the
+// position is s0 + u0·τ + B(τ), B what the decelerations add (the stop is past the run's end, which
+// ends above min_speed).
 std::pair<double, Vector2d> BestStartFor(const GroundData& d, double slide, const GroundLaw& law) {
   Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
   Vector2d b = Vector2d::Zero();
+  double yy = 0;
   for (std::size_t i = 0; i < d.tau.size(); ++i) {
-    const LawPoint p = TwoPhase(d.tau[i], 0, 0, slide, law.slide, law.roll);  // the part (s0, u0) do not set
-    const Vector2d phi(1.0, d.tau[i]);
+    const double tau = d.tau[i], rolled = std::max(0.0, tau - slide), slid = tau - rolled;
+    const double added = 0.5 * law.slide * slid * slid + law.slide * slid * rolled + 0.5 * law.roll * rolled * rolled;
+    const double y = d.s[i] - added;
+    const Vector2d phi(1.0, tau);
     a += d.w[i] * phi * phi.transpose();
-    b += d.w[i] * (d.s[i] - p.s) * phi;
+    b += d.w[i] * y * phi;
+    yy += d.w[i] * y * y;
   }
   const Vector2d c = a.ldlt().solve(b);
-  double ss = 0;
-  for (std::size_t i = 0; i < d.tau.size(); ++i) {
-    const LawPoint p = TwoPhase(d.tau[i], c[0], c[1], slide, law.slide, law.roll);
-    ss += d.w[i] * (p.s - d.s[i]) * (p.s - d.s[i]);
-  }
-  return {ss, c};
+  return {yy - c.dot(b), c};
 }
 
 // A run with its own slide time: the slide time on a grid, each with its best start (the law's
@@ -1064,6 +1126,14 @@ bool JudgeRuns(const GroundProblem& problem, Params& x, Selection& sel, const st
                  : Format("%s: rms %.1f mm (typical %.1f mm)", kLawMisfit, 1e3 * rms[b], 1e3 * typical);
   }
   return changed;
+}
+
+// Each used run's own parameters to their best with the globals held: cheap, and it spares the
+// joint steps from runs creeping along their own narrow valleys (slide time against speed).
+void RefitAllLocals(const GroundProblem& problem, Params& x, const Selection& sel) {
+  for (std::size_t b = 0; b < sel.blocks.size(); ++b) {
+    if (sel.blocks[b]) RefitLocals(problem, x, b);
+  }
 }
 
 // A run whose slide time is its own may have settled on the wrong side of the law's kink: put it
@@ -1207,14 +1277,17 @@ GroundResult FitGround(const std::vector<TrackPoint>& track, const TrackMarks& m
   // kink: alternate the joint fit with their grid before judging anything.
   // Runs off the law make the joint steps short, so the early passes are capped: judging the runs
   // soon does more for the speed than iterating.
-  for (int settle = 0; settle < 3; ++settle) {
+  for (int settle = 0; settle < (final ? 1 : 3); ++settle) {
+    RefitAllLocals(problem, fit.x, fit.sel);
     Minimise(problem, fit.x, fit.sel, 20);
     RegridSlides(problem, fit.x, fit.sel);
   }
   for (int round = 0; round < 6; ++round) {
+    RefitAllLocals(problem, fit.x, fit.sel);
     Minimise(problem, fit.x, fit.sel, 30);
     UpdateOutliers(problem, fit.x, fit.sel, options.outlier_sigmas);
     if (round < 2) RegridSlides(problem, fit.x, fit.sel);
+    RefitAllLocals(problem, fit.x, fit.sel);
     Minimise(problem, fit.x, fit.sel, 30);
     const bool changed = JudgeRuns(problem, fit.x, fit.sel, candidate, options, why);
     if (!changed && round >= 1) break;
@@ -1351,26 +1424,23 @@ class ChipProblem : public BlockProblem {
     const ChipData& d = chips_[static_cast<std::size_t>(block)];
     Residuals(d, g, l, r);
     if (!jg) return;
-    // Central differences: the model is a chain of flights with kinks at the landings.
+    // Forward differences: the model is a chain of flights with kinks at the landings, which no
+    // formula differentiates more usefully, and chips are few.
     const auto n = r.size();
     jg->resize(n, g.size());
     jl->resize(n, l.size());
-    VectorXd rp, rm;
+    VectorXd rp;
     for (Eigen::Index j = 0; j < g.size(); ++j) {
-      VectorXd gp = g, gm = g;
-      gp[j] += 1e-6;
-      gm[j] -= 1e-6;
+      VectorXd gp = g;
+      gp[j] += kStep;
       Residuals(d, gp, l, rp);
-      Residuals(d, gm, l, rm);
-      jg->col(j) = (rp - rm) / 2e-6;
+      jg->col(j) = (rp - r) / kStep;
     }
     for (Eigen::Index j = 0; j < l.size(); ++j) {
-      VectorXd lp = l, lm = l;
-      lp[j] += 1e-6;
-      lm[j] -= 1e-6;
+      VectorXd lp = l;
+      lp[j] += kStep;
       Residuals(d, g, lp, rp);
-      Residuals(d, g, lm, rm);
-      jl->col(j) = (rp - rm) / 2e-6;
+      jl->col(j) = (rp - r) / kStep;
     }
   }
   void Bound(VectorXd& loss) const override {
@@ -1393,6 +1463,7 @@ class ChipProblem : public BlockProblem {
     }
   }
 
+  static constexpr double kStep = 1e-7;  // s, m, m/s, 1: small against every parameter's scale
   std::vector<ChipData> chips_;
   GroundLaw law_;
   double g_, min_hop_;
@@ -1403,11 +1474,14 @@ std::vector<std::size_t> Launches(const std::vector<TrackPoint>& track, const Tr
                                   const BallFitOptions& options) {
   std::vector<std::size_t> launches;
   for (std::size_t i = 0; i < track.size(); ++i) {
-    if (marks.stray[i] || marks.near[i] || marks.brk[i] >= 0) continue;
+    if (marks.stray[i] || marks.near[i]) continue;
     const std::size_t j = PreviousGood(marks, i);
     if (j == kNone || track[i].t - track[j].t > options.max_gap) continue;
+    // Left a robot (breaks right after do not matter: a chip seen by two cameras zig-zags), or
+    // the first detection clear of a kick.
     const bool left_robot = marks.near[j];
-    const bool kicked = marks.brk[j] >= 0 && marks.break_kind[static_cast<std::size_t>(marks.brk[j])] == "kick";
+    const bool kicked = marks.brk[i] < 0 && marks.brk[j] >= 0 &&
+                        marks.break_kind[static_cast<std::size_t>(marks.brk[j])] == "kick";
     if (!left_robot && !kicked) continue;
     const std::size_t later = FirstAfter(track, track[i].t + 0.3);
     if (later == 0 || later - 1 <= i) continue;
@@ -1416,13 +1490,14 @@ std::vector<std::size_t> Launches(const std::vector<TrackPoint>& track, const Tr
   return launches;
 }
 
-// True when a used ground run that the law explains well starts right at the launch.
+// True when a used ground run that the law explains well starts right at the launch and goes on
+// for a while. A chip's first flight can pass for a short run (its swing away from the camera and
+// back looks like a slide); such a run ends at the landing's kink, soon after the launch.
 bool Explained(const std::vector<BallRun>& runs, double t_launch, double typical_rms) {
   for (const BallRun& run : runs) {
-    if (run.used && !run.airborne && run.t_begin >= t_launch - 1e-9 && run.t_begin <= t_launch + 0.1 &&
-        run.rms <= 1.5 * typical_rms) {
-      return true;
-    }
+    if (!run.used || run.airborne || run.t_begin < t_launch - 1e-9 || run.t_begin > t_launch + 0.1) continue;
+    const bool broken_soon = (run.ends == "turn" || run.ends == "kick") && run.t_end < t_launch + 1.5;
+    if (run.rms <= 1.5 * typical_rms && !broken_soon) return true;
   }
   return false;
 }
@@ -1525,17 +1600,13 @@ std::optional<ChipTrial> FitOneChip(ChipData data, const LaunchGuess& guess, con
     }
   }
   std::sort(starts.begin(), starts.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  if (getenv("CHIPTRUTH") && std::abs(t_first - std::atof(getenv("CHIPT"))) < 0.01) {
-    Params x; x.globals = Vector3d(0.5, 0.7, 0.9); VectorXd c(kChipParams);
-    std::sscanf(getenv("CHIPTRUTH"), "%lf,%lf,%lf,%lf,%lf,%lf", &c[0], &c[1], &c[2], &c[3], &c[4], &c[5]); x.locals = {c};
-    const double c0 = Cost(trial.problem, x, OneChip());
-    const double c1 = Minimise(trial.problem, x, OneChip(), 60);
-    std::fprintf(stderr, "   TRUTH cost %.5f -> %.5f t0 %.3f vz %.3f loss %.3f %.3f %.3f\n", c0, c1, x.locals[0][0], x.locals[0][5], x.globals[0], x.globals[1], x.globals[2]);
-  }
+  // Nothing in the grid comes within a decimetre: no chip (a bounce off a wall, a touch).
+  const auto residuals = static_cast<double>(2 * trial.problem.Chip(0).t.size());
+  auto rms = [&](double cost) { return std::sqrt(cost / residuals); };
+  if (starts.empty() || rms(starts.front().first) > kChipGridGiveUp) return std::nullopt;
   double best = kInf;
-  for (std::size_t k = 0; k < std::min<std::size_t>(4, starts.size()); ++k) {
+  for (std::size_t k = 0; k < std::min<std::size_t>(3, starts.size()) && rms(best) > kChipGoodEnough; ++k) {
     const double cost = Minimise(trial.problem, starts[k].second, OneChip(), 60);
-    if (getenv("CHIPDEBUG")) { const auto& c = starts[k].second.locals[0]; std::fprintf(stderr, "   start %zu: grid cost %.4f -> %.4f t0 %.3f vh %.2f vz %.2f\n", k, starts[k].first, cost, c[0], std::hypot(c[3], c[4]), c[5]); }
     if (cost < best) {
       best = cost;
       trial.x = starts[k].second;
@@ -1590,7 +1661,6 @@ double ChipOutliers(const ChipProblem& problem, const Params& x, std::size_t b, 
   problem.Evaluate(static_cast<int>(b), x.globals, x.locals[b], r, nullptr, nullptr);
   const double sigma = std::max(noise, RobustSigma(std::vector<double>(r.data(), r.data() + r.size())));
   for (std::size_t i = 0; i < w.size(); ++i) {
-    if (w[i] == 0) continue;  // a dropped detection's residual reads 0: judge it on its own
     w[i] = r.segment<2>(static_cast<Eigen::Index>(2 * i)).cwiseAbs().maxCoeff() <= sigmas * sigma;
   }
   return sigma;
@@ -1607,9 +1677,12 @@ double ChipRms(const ChipProblem& problem, const Params& x, std::size_t b) {
 // Drops detections off the chip's fit by more than outlier_sigmas·σ, refits, and measures it.
 void CleanChip(ChipTrial& trial, double noise, double sigmas) {
   ChipData& d = trial.problem.Chip(0);
-  std::fill(d.w.begin(), d.w.end(), 1.0);
-  ChipOutliers(trial.problem, trial.x, 0, noise, sigmas, d.w);
-  Minimise(trial.problem, trial.x, OneChip(), 40);
+  // Twice: detections judged against a fit that was still moving get a second hearing.
+  for (int pass = 0; pass < 2; ++pass) {
+    std::fill(d.w.begin(), d.w.end(), 1.0);
+    ChipOutliers(trial.problem, trial.x, 0, noise, sigmas, d.w);
+    Minimise(trial.problem, trial.x, OneChip(), 40);
+  }
   trial.rms = ChipRms(trial.problem, trial.x, 0);
   trial.dropped = 1 - std::accumulate(d.w.begin(), d.w.end(), 0.0) / static_cast<double>(d.w.size());
 }
@@ -1706,18 +1779,21 @@ std::optional<FoundChip> TryChip(const std::vector<TrackPoint>& track, const Tra
   chip.loss = trial->x.globals;
   chip.landed = LastLanding(chip.launch, chip.loss, chip.data.hops, options.gravity);
   SetChipRun(track, chip.data, chip.launch, options, chip.run);
-  // Airborne only if the flight shows: its apex, and how far the cameras see it off the carpet.
-  if (chip.run.apex < options.chip_min_apex || Swing(trial->problem, trial->x) < std::max(6 * noise, 0.015)) {
+  // Airborne only if the flight shows: its apex, and how far the cameras see it off the carpet. A
+  // fit that bounces on and on (damping_z near 1) is a ball on the carpet the hops imitate.
+  if (chip.run.apex < options.chip_min_apex || Swing(trial->problem, trial->x) < std::max(6 * noise, 0.015) ||
+      chip.loss[0] > 0.9 || chip.data.hops >= 12) {
     return std::nullopt;
   }
   chip.run.begins = marks.near[PreviousGood(marks, launch)] ? "robot" : "kick";
   chip.run.ends = "rolling";
   chip.run.rms = trial->rms;
   const double first_landing = chip.launch[kLaunchTime] + 2 * chip.launch[kVz] / options.gravity;
-  const double limit = std::max(2 * noise, noise + 0.003);
-  if (trial->rms > limit || trial->dropped > 0.1) {
-    chip.run.reason = Format("airborne, but the hop model does not fit: rms %.1f mm (noise %.1f mm)",
-                             1e3 * trial->rms, 1e3 * noise);
+  const double limit = std::max(1.5 * noise, noise + 0.002);
+  if (trial->rms > 5 * limit) return std::nullopt;  // not a near miss: nothing airborne to report
+  if (trial->rms > limit || trial->dropped > 0.05) {
+    chip.run.reason = Format("airborne, but the hop model does not fit: rms %.1f mm (noise %.1f mm), %.0f %% of "
+                             "the detections off it", 1e3 * trial->rms, 1e3 * noise, 100 * trial->dropped);
   } else if (first_landing > chip.run.t_end) {
     chip.run.reason = "airborne, but its first landing is not seen";
   }
@@ -1836,7 +1912,11 @@ void GroundEstimates(const GroundResult& ground, const BallFitInput& input, cons
 // the joint dampings (or the data, where the rule is borderline).
 void SolveChips(ChipProblem& problem, Params& x, const Selection& sel) {
   for (int round = 0; round < 4; ++round) {
-    Minimise(problem, x, sel, 100);
+    // Each launch to its best first (each with its own damping), then all together.
+    for (std::size_t b = 0; b < sel.blocks.size(); ++b) {
+      if (sel.blocks[b]) MinimiseBlock(problem, static_cast<int>(b), x.globals, x.locals[b], 30);
+    }
+    Minimise(problem, x, sel, 50);
     bool changed = false;
     for (std::size_t b = 0; b < sel.blocks.size(); ++b) {
       if (sel.blocks[b]) changed = ChooseHops(problem, x, b, false) || changed;
@@ -1896,7 +1976,7 @@ Eigen::Matrix3d ChipJackknife(ChipProblem& problem, const Params& x, const Selec
     Selection without = sel;
     without.blocks[b] = 0;
     Params y = x;
-    Minimise(problem, y, without, 40);
+    Minimise(problem, y, without, 15);
     estimates.push_back(y.globals.head<3>());
   }
   replicates = static_cast<int>(estimates.size());
@@ -1909,24 +1989,25 @@ Eigen::Matrix3d ChipJackknife(ChipProblem& problem, const Params& x, const Selec
   return cov * (n - 1) / n;
 }
 
-// Chips fitting much worse than the typical chip under the shared dampings are left out.
-bool JudgeChips(const ChipProblem& problem, const Params& x, Selection& sel, const BallFitOptions& options,
-                std::vector<FoundChip>& chips) {
-  std::vector<double> rms(chips.size(), kInf), used;
+// Chips that fit the shared dampings much worse than their own are left out (the worst first,
+// one at a time, as one odd chip can drag the shared values and make the others look bad).
+bool JudgeChips(const ChipProblem& problem, const Params& x, Selection& sel, std::vector<FoundChip>& chips) {
+  std::size_t worst = kNone;
+  double worst_ratio = 1;
   for (std::size_t b = 0; b < chips.size(); ++b) {
-    rms[b] = ChipRms(problem, x, b);
-    if (sel.blocks[b]) used.push_back(rms[b]);
+    if (!sel.blocks[b]) continue;
+    const double own = chips[b].run.rms, shared = ChipRms(problem, x, b);
+    const double ratio = shared / std::max(2 * own, own + 0.002);
+    if (ratio > worst_ratio) {
+      worst = b;
+      worst_ratio = ratio;
+    }
   }
-  const double typical = Median(used), limit = std::max(options.run_rms_factor * typical, typical + 0.001);
-  bool changed = false;
-  for (std::size_t b = 0; b < chips.size(); ++b) {
-    if (!sel.blocks[b] || rms[b] <= limit) continue;
-    sel.blocks[b] = 0;
-    changed = true;
-    chips[b].run.reason = Format("does not fit the dampings the other chips share: rms %.1f mm (typical %.1f mm)",
-                                 1e3 * rms[b], 1e3 * typical);
-  }
-  return changed;
+  if (worst == kNone) return false;
+  sel.blocks[worst] = 0;
+  chips[worst].run.reason = Format("does not fit the dampings the other chips share: rms %.1f mm (%.1f mm alone)",
+                                   1e3 * ChipRms(problem, x, worst), 1e3 * chips[worst].run.rms);
+  return true;
 }
 
 // The dampings over all chips at once (globals), each chip's launch its own block; intervals from
@@ -1947,9 +2028,9 @@ void FitChipsJointly(const std::vector<TrackPoint>& track, std::vector<FoundChip
   x.globals = Vector3d(Median(dz), Median(d1), Median(d2));
   ChipProblem problem(std::move(data), law, options);
   Selection sel{std::vector<char>(chips.size(), 1), {1, 1, 1}};
-  for (int round = 0; round < 3; ++round) {
+  for (std::size_t round = 0; round < chips.size(); ++round) {
     SolveChips(problem, x, sel);
-    if (!JudgeChips(problem, x, sel, options, chips)) break;
+    if (!JudgeChips(problem, x, sel, chips)) break;
   }
   // Dampings no used chip shows are held at the league's defaults and not estimated.
   const std::array<int, 3> informers = ChipInformers(chips, x, sel, options.gravity);
@@ -2027,10 +2108,13 @@ BallFit FitBall(const BallFitInput& input, const BallFitOptions& options) {
     fit.problems.push_back(Format("the ball track has only %zu detections", track.size()));
     return fit;
   }
+  auto T0 = std::chrono::steady_clock::now(); auto lap = [&](const char* w) { if (!getenv("TIMING")) return; auto t = std::chrono::steady_clock::now(); std::fprintf(stderr, "%s %.3f\n", w, std::chrono::duration<double>(t - T0).count()); T0 = t; };
   const TrackMarks marks = MarkTrack(track, input, options);
+  lap("marks");
   fit.noise = marks.noise;
   std::vector<KickPoint> kicks;
   fit.runs = CandidateRuns(track, marks, input, options, kicks);
+  lap("candidates");
   auto by_time = [](const BallRun& a, const BallRun& b) { return a.t_begin < b.t_begin; };
   const int usable = CountUsable(fit.runs);
   if (usable < std::max(options.min_runs, 1)) {
@@ -2039,16 +2123,20 @@ BallFit FitBall(const BallFitInput& input, const BallFitOptions& options) {
     return fit;
   }
   GroundResult ground = FitGround(track, marks, options, fit.runs, kicks, GroundLaw{}, false);
+  lap("ground1");
   if (TooFewUsed(fit.runs, options, fit)) return fit;
   const double noise = std::isfinite(ground.sigma) ? ground.sigma : marks.noise;
   std::vector<FoundChip> chips = FindChips(track, marks, input, options, LawOf(ground.x.globals), noise, fit.runs);
+  lap("chips");
   // Again without the flights, now with intervals.
   ground = FitGround(track, marks, options, fit.runs, kicks, LawOf(ground.x.globals), true);
+  lap("ground2");
   if (TooFewUsed(fit.runs, options, fit)) return fit;
   fit.enough_data = true;
   fit.rms_residual = UsedRms(fit.runs);
   GroundEstimates(ground, input, options, fit);
   FitChipsJointly(track, chips, LawOf(ground.x.globals), options, fit);
+  lap("joint chips");
   for (FoundChip& chip : chips) fit.runs.push_back(chip.run);
   std::stable_sort(fit.runs.begin(), fit.runs.end(), by_time);
   return fit;

@@ -186,6 +186,11 @@ CalibrationOutcome Calibrate(const CalibrateOptions& options, const std::functio
   for (const auto& in : robot_inputs) fits.robots.push_back(FitRobot(in));
   outcome.seconds_robots = Since(robots_start);
   fits.ball = ball_future.get();
+  // The ball keeps its own inertia (the model files do): the rolling resistance follows from it,
+  // and the switch the kicks showed is theirs, not the ball's (model_output.cpp says why).
+  const BaseBall base_ball = ReadBaseBall(options.base_world);
+  fits.ball.rolling_friction = RollingFriction(fits.ball.acc_roll, base_ball.inertia_factor, base_ball.radius);
+  fits.ball.inertia_factor = {};
   fits.cameras = camera_future.get();
   fits.perception = PerceptionFromFit(fits.cameras);
   fits.latency = CombinedLatency(fits.robots);
@@ -231,7 +236,14 @@ CalibrationOutcome Calibrate(const CalibrateOptions& options, const std::functio
   md << Row("ball: slide→roll switch", b.k_switch, "", "runs", "geometry `k_switch`");
   md << Row("ball–carpet friction μ", b.mu, "", "runs", "ball–carpet `mu`");
   md << Row("ball rolling resistance ρ", b.rolling_friction, "m", "runs", "ball–carpet `rolling_friction`");
-  md << Row("ball inertia factor", b.inertia_factor, "", "runs", "ball `inertia_factor`");
+  {
+    char buf[240];
+    std::snprintf(buf, sizeof buf,
+                  "| ball inertia factor | %.4g (the ball's own, kept) | | | ball `inertia_factor`: spin-free, the "
+                  "switch would be %.3f |\n",
+                  base_ball.inertia_factor, 1 / (1 + base_ball.inertia_factor));
+    md << buf;
+  }
   md << Row("chip: vertical damping", b.damping_z, "", "chips", "ball–carpet `bounce`, geometry `damping_z`");
   md << Row("chip: horizontal, first hop", b.damping_xy_first_hop, "", "chips", "geometry `damping_xy_first_hop`");
   md << Row("chip: horizontal, later hops", b.damping_xy_other_hops, "", "chips", "geometry `damping_xy_other_hops`");

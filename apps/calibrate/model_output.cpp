@@ -79,14 +79,6 @@ std::string FileName(const RobotKey& k) {
   return std::string("robot-") + (k.team == TeamColour::kBlue ? "blue-" : "yellow-") + std::to_string(k.id) + ".yaml";
 }
 
-// The rolling resistance ρ (m) that gives the rolling deceleration `acc_roll` (negative, m/s²) to
-// a ball of inertia factor k and radius r rolling without slip: a_r = −ρ·g/((1 + k)·r).
-Estimate RollingFriction(const Estimate& acc_roll, double k, double radius) {
-  if (!acc_roll.ok()) return {};
-  const double f = (1 + k) * radius / 9.81;
-  return {-acc_roll.value * f, -acc_roll.high * f, -acc_roll.low * f, acc_roll.samples};
-}
-
 const char* TeamName(TeamColour t) { return t == TeamColour::kBlue ? "blue" : "yellow"; }
 
 // The median of the robots' estimates of one quantity (a team's robots are normally alike).
@@ -135,6 +127,24 @@ void WriteRobot(const fs::path& base, const fs::path& file, const RobotFit& fit,
 }
 
 }  // namespace
+
+Estimate RollingFriction(const Estimate& acc_roll, double k, double radius) {
+  if (!acc_roll.ok()) return {};
+  const double f = (1 + k) * radius / 9.81;
+  return {-acc_roll.value * f, -acc_roll.high * f, -acc_roll.low * f, acc_roll.samples};
+}
+
+BaseBall ReadBaseBall(const fs::path& base_world) {
+  BaseBall b;
+  const YAML::Node world = Load(base_world);
+  if (!world["ball"] || !world["ball"].IsScalar()) return b;
+  fs::path file(world["ball"].as<std::string>());
+  if (file.is_relative()) file = fs::absolute(base_world).parent_path() / file;
+  const YAML::Node ball = Load(file);
+  if (ball["inertia_factor"]) b.inertia_factor = ball["inertia_factor"].as<double>();
+  if (ball["radius"]) b.radius = ball["radius"].as<double>();
+  return b;
+}
 
 std::string Describe(const Estimate& e, const char* what_samples) {
   if (!e.ok() || !std::isfinite(e.value)) return "not estimated";
@@ -214,8 +224,8 @@ ModelFiles WriteModelFiles(const fs::path& base_world, const fs::path& out_dir, 
       << "−acc_roll·(1 + inertia_factor)·radius/g with this ball's inertia_factor " << k << "):\n"
       << "  mu               " << Describe(fits.ball.mu, "runs") << "\n"
       << "  rolling_friction " << Describe(rho, "runs") << " m\n"
-      << "A spin-free ball of this inertia turns from sliding to rolling at " << 1 / (1 + k)
-      << " of its speed; the kicks in the log switched at\n" << Describe(fits.ball.k_switch, "runs")
+      << "A spin-free ball of this inertia turns from sliding to rolling at " << Round4(1 / (1 + k))
+      << " of its speed;\nthe kicks in the log switched at " << Describe(fits.ball.k_switch, "runs")
       << ": the rest is the spin the kicks gave.\n"
       << "Chips: damping_z (surface.bounce) " << Describe(fits.ball.damping_z, "chips") << ", horizontal "
       << Describe(fits.ball.damping_xy_first_hop, "chips") << " at the first hop, "

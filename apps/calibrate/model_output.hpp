@@ -43,6 +43,20 @@ struct ModelFiles {
 ModelFiles WriteModelFiles(const std::filesystem::path& base_world, const std::filesystem::path& out_dir,
                            const CalibrationFits& fits, bool geometry_models, std::vector<std::string>* problems);
 
+/// The base world's ball as the fits need it.
+struct BaseBall {
+  double inertia_factor = 0.4;  ///< I = k·m·r²
+  double radius = 0.0215;       ///< m
+};
+
+/// The ball file `base_world` names (its inertia and radius; the defaults when it names none).
+/// Throws std::runtime_error naming the file when it cannot be read.
+BaseBall ReadBaseBall(const std::filesystem::path& base_world);
+
+/// The rolling resistance ρ (m) that gives the rolling deceleration `acc_roll` (negative, m/s²) to
+/// a ball of inertia factor k and radius r rolling without slip: a_r = −ρ·g/((1 + k)·r).
+Estimate RollingFriction(const Estimate& acc_roll, double k, double radius);
+
 /// "0.1234 [0.1200, 0.1268] (41 runs)": an estimate as the comments and the report give it.
 std::string Describe(const Estimate& e, const char* what_samples);
 
