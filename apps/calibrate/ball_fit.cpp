@@ -30,7 +30,7 @@
 #include "ball_fit.hpp"
 
 #include <algorithm>
-#include <chrono>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -352,7 +352,17 @@ std::string Cause(const std::vector<TrackPoint>& track, const TrackMarks& marks,
   return "slow";
 }
 
-// Maximal stretches of free detections (strays inside are skipped, not breaking the stretch).
+// The detections in [first, last) that are not strays.
+std::vector<std::size_t> GoodIndices(const TrackMarks& marks, std::size_t first, std::size_t last) {
+  std::vector<std::size_t> idx;
+  for (std::size_t i = first; i < last; ++i) {
+    if (!marks.stray[i]) idx.push_back(i);
+  }
+  return idx;
+}
+
+// Maximal stretches of free detections (strays inside are skipped, not breaking the stretch); the
+// odd one or two detections of a slow ball's speed flickering about min_speed are not runs.
 std::vector<BallRun> Stretches(const std::vector<TrackPoint>& track, const TrackMarks& marks,
                                const BallFitOptions& options) {
   std::vector<BallRun> runs;
@@ -372,7 +382,7 @@ std::vector<BallRun> Stretches(const std::vector<TrackPoint>& track, const Track
     run.last = last + 1;
     run.begins = Cause(track, marks, options, i, PreviousGood(marks, i));
     run.ends = Cause(track, marks, options, last, NextGood(marks, last));
-    runs.push_back(std::move(run));
+    if (GoodIndices(marks, run.first, run.last).size() >= 3) runs.push_back(std::move(run));
     i = last + 1;
   }
   return runs;
@@ -391,14 +401,6 @@ Line LineOf(const BallRun& run) {
   line.origin = {run.x0, run.y0};
   line.dir = {std::cos(run.heading), std::sin(run.heading)};
   return line;
-}
-
-std::vector<std::size_t> GoodIndices(const TrackMarks& marks, std::size_t first, std::size_t last) {
-  std::vector<std::size_t> idx;
-  for (std::size_t i = first; i < last; ++i) {
-    if (!marks.stray[i]) idx.push_back(i);
-  }
-  return idx;
 }
 
 // Principal axis of the detections, pointing the way the ball went.
@@ -511,8 +513,9 @@ struct KickPoint {
 // The kick from detections before the run: split them where a line in time (the ball at rest or
 // carried) before and the run's start extrapolated back after fit them best, then date the kick
 // where the two motions meet. t is NaN when the detections do not show a kick.
-KickPoint KickFromDetections(const std::vector<TrackPoint>& track, const TrackMarks& marks, const BallFitOptions& options,
-                          const BallRun& run, const Line& line, const LocalPoly& early) {
+KickPoint KickFromDetections(const std::vector<TrackPoint>& track, const TrackMarks& marks,
+                             const BallFitOptions& options, const BallRun& run, const Line& line,
+                             const LocalPoly& early) {
   const std::vector<std::size_t> pre = DetectionsBefore(track, marks, options, run);
   double best_cost = kInf;
   std::size_t best = 0;
@@ -541,11 +544,13 @@ KickPoint KickFromDetections(const std::vector<TrackPoint>& track, const TrackMa
   };
   const double tk = Bisect(gap, t_last_rest, t_first_moving);
   if (!std::isfinite(tk)) return {};
-  // A kick: the speed along the line jumps, and the ball was on the line when it did.
+  // A kick: the ball is faster after it (a wall or a robot's body only slows it), and it was on the
+  // run's line when it happened.
   const double v_kick = line.dir.dot(early.Velocity(tk - run.t_begin));
   const double v_before = line.dir.dot(best_before.Velocity(0));
+  const double speed_before = best_before.Velocity(0).norm();
   const double off_line = std::abs(line.Across(best_before.Position(tk - t_last_rest)));
-  if (v_kick - v_before < std::max(0.5, 0.2 * v_kick) || off_line > 0.03 + 3 * marks.noise) return {};
+  if (v_kick - speed_before < std::max(0.5, 0.2 * v_kick) || off_line > 0.03 + 3 * marks.noise) return {};
   // The place is as good as the mean of the detections before, plus a millimetre for how the ball
   // sits at the robot.
   const double sigma = std::hypot(marks.noise / std::sqrt(best_before.n), 0.001);
@@ -795,7 +800,6 @@ double Minimise(const BlockProblem& problem, Params& x, const Selection& sel, in
         better = true;
         gain = cost - c;
         moved = step.globals.dot(step.reduced * step.globals);
-        if (getenv("LMTRACE") && problem.Blocks() > 900) { std::size_t bb = 0; double bg = 0; for (std::size_t b = 0; b < costs.size(); ++b) if (sel.blocks[b] && costs[b] - trial_costs[b] > bg) { bg = costs[b] - trial_costs[b]; bb = b; } std::fprintf(stderr, "    best block %zu gain %.3g locals %.4f %.4f %.4f -> %.4f %.4f %.4f\n", bb, bg, x.locals[bb][0], x.locals[bb][1], x.locals[bb][2], trial.locals[bb][0], trial.locals[bb][1], trial.locals[bb][2]); }
         x = std::move(trial);
         costs.swap(trial_costs);
         cost = c;
@@ -804,14 +808,12 @@ double Minimise(const BlockProblem& problem, Params& x, const Selection& sel, in
         lambda *= 4;
       }
     }
-    if (getenv("LMTRACE") && problem.Blocks() > 900) std::fprintf(stderr, "  it %d cost %.6f gain %.3g lambda %.3g tol %.3g g %.4f %.4f %.4f\n", it, cost, gain, lambda, 1e-3 * cost / ne.residuals, x.globals[0], x.globals[1], x.globals[2]);
     // Done when the cost no longer falls, or the globals no longer move (by 0.1 % of their standard
     // error): what is left is a run's own parameters creeping along a kink of its law.
     const double sigma2 = cost / static_cast<double>(std::max<Eigen::Index>(1, ne.residuals));
     const bool still = it >= 2 && x.globals.size() > 0 && moved < 1e-6 * sigma2;
-    if (!better || Converged(gain, cost, ne.residuals) || still) { if (getenv("LMDEBUG")) std::fprintf(stderr, "LM blocks %d iterations %d lambda %g\n", problem.Blocks(), it + 1, lambda); return cost; }
+    if (!better || Converged(gain, cost, ne.residuals) || still) return cost;
   }
-  if (getenv("LMDEBUG")) std::fprintf(stderr, "LM blocks %d iterations MAX %d\n", problem.Blocks(), max_iterations);
   return cost;
 }
 
@@ -1055,7 +1057,6 @@ struct GroundResult {
   Params x;
   Selection sel;
   double sigma = 0;       // m, residual σ of the used detections
-  int residuals = 0;      // used detections
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // of the globals, formal
   Eigen::Matrix3d jackknife = Eigen::Matrix3d::Zero();   // of the globals, grouped jackknife
   int jackknife_groups = 0;
@@ -1103,11 +1104,10 @@ double UpdateOutliers(GroundProblem& problem, Params& x, const Selection& sel, d
 }
 
 // Runs fitting much worse than the typical used run, or with many detections off the law, are out.
-bool JudgeRuns(const GroundProblem& problem, Params& x, Selection& sel, const std::vector<char>& candidate,
-               const BallFitOptions& options, std::vector<std::string>& why) {
+bool JudgeRuns(const GroundProblem& problem, Params& x, Selection& sel, const BallFitOptions& options,
+               std::vector<std::string>& why) {
   std::vector<double> rms(sel.blocks.size(), kInf), dropped(sel.blocks.size(), 1.0), used;
   for (std::size_t b = 0; b < sel.blocks.size(); ++b) {
-    if (!candidate[b]) continue;
     if (!sel.blocks[b]) RefitLocals(problem, x, b);
     std::tie(rms[b], dropped[b]) = BlockRms(problem, x, b);
     if (sel.blocks[b]) used.push_back(rms[b]);
@@ -1116,7 +1116,6 @@ bool JudgeRuns(const GroundProblem& problem, Params& x, Selection& sel, const st
   const double limit = std::max(options.run_rms_factor * typical, typical + 0.001);
   bool changed = false;
   for (std::size_t b = 0; b < sel.blocks.size(); ++b) {
-    if (!candidate[b]) continue;
     const bool keep = rms[b] <= limit && dropped[b] <= 0.05;
     if (keep != static_cast<bool>(sel.blocks[b])) changed = true;
     sel.blocks[b] = keep;
@@ -1179,7 +1178,8 @@ std::array<int, 3> Informers(const GroundProblem& problem, const Params& x, cons
   return count;
 }
 
-double ResidualSigma(const GroundProblem& problem, const Params& x, const Selection& sel, int& residuals) {
+// σ of the used detections' residuals, with the parameters fitted taken out of their number.
+double ResidualSigma(const GroundProblem& problem, const Params& x, const Selection& sel) {
   double ss = 0, kept = 0, params = 3;
   for (std::size_t b = 0; b < sel.blocks.size(); ++b) {
     if (!sel.blocks[b]) continue;
@@ -1190,7 +1190,6 @@ double ResidualSigma(const GroundProblem& problem, const Params& x, const Select
     kept += problem.Run(b).kick;  // the kick's place
     params += static_cast<double>(x.locals[b].size());
   }
-  residuals = static_cast<int>(kept);
   return kept > params ? std::sqrt(ss / (kept - params)) : kNaN;
 }
 
@@ -1229,6 +1228,7 @@ void Jackknife(GroundResult& fit) {
   fit.jackknife_groups = static_cast<int>(estimates.size());
 }
 
+// The globals' covariance σ²(JᵀJ)⁻¹, the runs' own parameters eliminated; held globals get none.
 void Covariance(GroundResult& fit) {
   const MatrixXd info = Information(*fit.problem, fit.x, fit.sel);
   Eigen::Matrix3d free_info = Eigen::Matrix3d::Identity();
@@ -1248,8 +1248,25 @@ void Covariance(GroundResult& fit) {
   }
 }
 
-// The ground fit over the runs that passed the checks: robust rounds, then unestimable globals
-// held, then (when `final`) intervals. `start` warm-starts it (after chips were taken out).
+// Brings the globals near from where they start: on a sample of at most 200 runs first, then on
+// all. Between passes the runs with their own slide time are put back on the grid (from far-off
+// globals they may sit on the wrong side of the law's kink). Passes are capped: with runs off the
+// law still in, the joint steps are short, and judging the runs soon does more for the speed.
+void Settle(const GroundProblem& problem, Params& x, const Selection& all, int passes) {
+  Selection sample = all;
+  const std::size_t stride = std::max<std::size_t>(1, all.blocks.size() / 200);
+  for (std::size_t b = 0; b < sample.blocks.size(); ++b) sample.blocks[b] = all.blocks[b] && b % stride == 0;
+  for (int pass = 0; pass < passes; ++pass) {
+    const Selection& sel = pass + 1 < passes ? sample : all;
+    RefitAllLocals(problem, x, sel);
+    Minimise(problem, x, sel, 20);
+    RegridSlides(problem, x, all);
+  }
+}
+
+// The ground fit over the runs that passed the checks: robust rounds (outliers dropped, runs off
+// the law rejected, refit), then globals no run informs held, then (when `final`) intervals.
+// `start` is where the globals start (the defaults, or the first fit's after chips are taken out).
 GroundResult FitGround(const std::vector<TrackPoint>& track, const TrackMarks& marks, const BallFitOptions& options,
                        std::vector<BallRun>& runs, const std::vector<KickPoint>& kicks, const GroundLaw& start,
                        bool final) {
@@ -1268,20 +1285,10 @@ GroundResult FitGround(const std::vector<TrackPoint>& track, const TrackMarks& m
   for (std::size_t b = 0; b < blocks; ++b) {
     fit.x.locals.push_back(InitialLocals(problem.Run(b), runs[fit.run_of[b]], start));
   }
-  if (getenv("GROUNDDEBUG")) for (std::size_t b = 0; b < blocks; ++b) { const BallRun& r = runs[fit.run_of[b]]; if (std::abs(r.t_begin - std::atof(getenv("GROUNDDEBUG"))) < 0.05) { const GroundData& d = problem.Run(b); std::fprintf(stderr, "run %.3f kick %d tref %.4f init (%.4f %.4f %.4f) kick_s %.4f v %.3f w %.2f\n", r.t_begin, d.kick, r.t_ref, fit.x.locals[b][0], fit.x.locals[b][1], fit.x.locals[b][2], d.kick_s, d.kick_v, d.kick_weight); for (std::size_t i = 0; i < d.tau.size(); i += 10) std::fprintf(stderr, "   tau %.4f s %.4f\n", d.tau[i], d.s[i]); } }
   fit.sel.blocks.assign(blocks, 1);
   fit.sel.globals.assign(3, 1);
-  const std::vector<char> candidate(blocks, 1);
+  Settle(problem, fit.x, fit.sel, final ? 1 : 3);
   std::vector<std::string> why(blocks);
-  // From the defaults the runs with their own slide time may start on the wrong side of the law's
-  // kink: alternate the joint fit with their grid before judging anything.
-  // Runs off the law make the joint steps short, so the early passes are capped: judging the runs
-  // soon does more for the speed than iterating.
-  for (int settle = 0; settle < (final ? 1 : 3); ++settle) {
-    RefitAllLocals(problem, fit.x, fit.sel);
-    Minimise(problem, fit.x, fit.sel, 20);
-    RegridSlides(problem, fit.x, fit.sel);
-  }
   for (int round = 0; round < 6; ++round) {
     RefitAllLocals(problem, fit.x, fit.sel);
     Minimise(problem, fit.x, fit.sel, 30);
@@ -1289,8 +1296,7 @@ GroundResult FitGround(const std::vector<TrackPoint>& track, const TrackMarks& m
     if (round < 2) RegridSlides(problem, fit.x, fit.sel);
     RefitAllLocals(problem, fit.x, fit.sel);
     Minimise(problem, fit.x, fit.sel, 30);
-    const bool changed = JudgeRuns(problem, fit.x, fit.sel, candidate, options, why);
-    if (!changed && round >= 1) break;
+    if (!JudgeRuns(problem, fit.x, fit.sel, options, why) && round >= 1) break;
   }
   // Globals no used run informs are held at the league's defaults and reported as not estimated.
   fit.informers = Informers(problem, fit.x, fit.sel);
@@ -1301,7 +1307,7 @@ GroundResult FitGround(const std::vector<TrackPoint>& track, const TrackMarks& m
     fit.x.globals[static_cast<Eigen::Index>(j)] = defaults[static_cast<Eigen::Index>(j)];
   }
   Minimise(problem, fit.x, fit.sel, 100);
-  fit.sigma = ResidualSigma(problem, fit.x, fit.sel, fit.residuals);
+  fit.sigma = ResidualSigma(problem, fit.x, fit.sel);
   if (std::isfinite(fit.sigma) && final) {
     Covariance(fit);
     Jackknife(fit);
@@ -1545,7 +1551,6 @@ LaunchGuess GuessLaunch(const std::vector<TrackPoint>& track, const TrackMarks& 
     ys.push_back(track[pre[k]].y);
   }
   LaunchGuess guess;
-  if (getenv("CHIPDEBUG")) { for (auto j : pre) std::fprintf(stderr, "   pre %.3f (%.3f %.3f) near %d brk %d\n", track[j].t, track[j].x, track[j].y, marks.near[j], marks.brk[j]); }
   if (xs.size() >= 2) {
     guess.from = Vector2d(Median(xs), Median(ys));
     // It left after the last detection still at rest.
@@ -1584,19 +1589,29 @@ std::optional<ChipTrial> FitOneChip(ChipData data, const LaunchGuess& guess, con
   const double t_first = data.t.front();
   std::vector<ChipData> one{std::move(data)};
   ChipTrial trial{ChipProblem(std::move(one), law, options), {}, kInf, 1};
-  std::vector<std::pair<double, Params>> starts;
+  auto start_at = [&](double t0, double vh, double vz) {
+    Params x;
+    x.globals = Vector3d(0.6, 0.75, 0.9);
+    // Launched from the resting place; or, hidden, from back along the way it went.
+    const Vector2d from = guess.t0.size() == 1 ? guess.from : Vector2d(guess.from - dir * vh * (t_first - t0));
+    VectorXd c(kChipParams);
+    c << t0, from.x(), from.y(), vh * dir.x(), vh * dir.y(), vz;
+    x.locals = {c};
+    return std::make_pair(Cost(trial.problem, x, OneChip()), std::move(x));
+  };
+  // Coarse grid of launch speeds, then a finer one about its three best.
+  std::vector<std::pair<double, Params>> coarse, starts;
   for (double t0 : guess.t0) {
-    for (double vh = 0.8; vh <= 6.5; vh += 0.25) {
-      for (double vz = 0.8; vz <= 6.0; vz += 0.25) {
-        Params x;
-        x.globals = Vector3d(0.6, 0.75, 0.9);
-        // Launched from the resting place; or, hidden, from back along the way it went.
-        const Vector2d from = guess.t0.size() == 1 ? guess.from : Vector2d(guess.from - dir * vh * (t_first - t0));
-        VectorXd c(kChipParams);
-        c << t0, from.x(), from.y(), vh * dir.x(), vh * dir.y(), vz;
-        x.locals = {c};
-        starts.emplace_back(Cost(trial.problem, x, OneChip()), std::move(x));
-      }
+    for (double vh = 1.0; vh <= 6.5; vh += 0.5) {
+      for (double vz = 1.0; vz <= 6.0; vz += 0.5) coarse.push_back(start_at(t0, vh, vz));
+    }
+  }
+  std::sort(coarse.begin(), coarse.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (std::size_t k = 0; k < std::min<std::size_t>(3, coarse.size()); ++k) {
+    const VectorXd& c = coarse[k].second.locals[0];
+    const double t0 = c[kLaunchTime], vh = std::hypot(c[kVx], c[kVy]), vz = c[kVz];
+    for (double dh = -0.375; dh <= 0.376; dh += 0.125) {
+      for (double dz = -0.375; dz <= 0.376; dz += 0.125) starts.push_back(start_at(t0, vh + dh, vz + dz));
     }
   }
   std::sort(starts.begin(), starts.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -1742,24 +1757,16 @@ BallRun UnfittableChip(const std::vector<TrackPoint>& track, const std::vector<s
   return run;
 }
 
-// Tries the chip model on the detections after a launch. nullopt: nothing airborne there;
-// otherwise a chip, used when the hop model fits (or rejected, saying why).
-std::optional<FoundChip> TryChip(const std::vector<TrackPoint>& track, const TrackMarks& marks,
-                                 const BallFitInput& input, const BallFitOptions& options, std::size_t launch,
-                                 const GroundLaw& law, double noise) {
-  std::vector<std::size_t> idx = ChipWindow(track, marks, options, launch, track[launch].t + kChipFirstWindow);
-  if (static_cast<int>(idx.size()) < options.min_points) return std::nullopt;
-  for (std::size_t i : idx) {
-    if (!input.cameras.count(track[i].camera_id)) {
-      FoundChip chip;
-      chip.run = UnfittableChip(track, idx, track[i].camera_id);
-      return chip;
-    }
-  }
-  std::optional<ChipTrial> trial = FitOneChip(MakeChipData(track, input, idx), GuessLaunch(track, marks, options, launch), law, options);
+// The hop model fitted to the detections after a launch: first over kChipFirstWindow, then over
+// its flights and a short roll-out (later on, walls and robots are the ground fit's business).
+std::optional<ChipTrial> FitChipAfter(const std::vector<TrackPoint>& track, const TrackMarks& marks,
+                                      const BallFitInput& input, const BallFitOptions& options,
+                                      std::size_t launch, std::vector<std::size_t> idx, const GroundLaw& law,
+                                      double noise) {
+  std::optional<ChipTrial> trial =
+      FitOneChip(MakeChipData(track, input, idx), GuessLaunch(track, marks, options, launch), law, options);
   if (!trial) return std::nullopt;
   CleanChip(*trial, noise, options.outlier_sigmas);  // a stray must not steer what follows
-  // Keep the flights and a short roll-out: later on, walls and robots are the ground fit's business.
   const ChipData& first = trial->problem.Chip(0);
   const int hops = trial->problem.Hops(first, trial->x.locals[0], trial->x.globals);
   const double landed = LastLanding(trial->x.locals[0], trial->x.globals, hops, options.gravity);
@@ -1768,29 +1775,45 @@ std::optional<FoundChip> TryChip(const std::vector<TrackPoint>& track, const Tra
     trial->problem.Chip(0) = MakeChipData(track, input, idx);
     CleanChip(*trial, noise, options.outlier_sigmas);
   }
-  if (getenv("CHIPDEBUG")) { const VectorXd& c = trial->x.locals[0]; std::fprintf(stderr, "trial launch %.3f: t0 %.3f p (%.2f %.2f) v (%.2f %.2f %.2f) loss %.3f %.3f %.3f cost %.5f n %zu end %.3f\n", track[launch].t, c[0], c[1], c[2], c[3], c[4], c[5], trial->x.globals[0], trial->x.globals[1], trial->x.globals[2], Cost(trial->problem, trial->x, OneChip()), trial->problem.Chip(0).t.size(), trial->problem.Chip(0).t.back()); }
   SettleHops(*trial);
-  if (getenv("CHIPDEBUG")) { const VectorXd& c = trial->x.locals[0]; std::fprintf(stderr, "  settled hops %d: t0 %.3f v (%.2f %.2f %.2f) loss %.3f %.3f %.3f cost %.5f\n", trial->problem.Chip(0).hops, c[0], c[3], c[4], c[5], trial->x.globals[0], trial->x.globals[1], trial->x.globals[2], Cost(trial->problem, trial->x, OneChip())); }
   CleanChip(*trial, noise, options.outlier_sigmas);
-  if (getenv("CHIPDEBUG")) std::fprintf(stderr, "  cleaned rms %.4f dropped %.3f\n", trial->rms, trial->dropped);
+  return trial;
+}
+
+// Tries the chip model on the detections after a launch. nullopt: nothing airborne there;
+// otherwise a chip, used when the hop model fits (or rejected, saying why).
+std::optional<FoundChip> TryChip(const std::vector<TrackPoint>& track, const TrackMarks& marks,
+                                 const BallFitInput& input, const BallFitOptions& options, std::size_t launch,
+                                 const GroundLaw& law, double noise) {
+  const std::vector<std::size_t> idx =
+      ChipWindow(track, marks, options, launch, track[launch].t + kChipFirstWindow);
+  if (static_cast<int>(idx.size()) < options.min_points) return std::nullopt;
   FoundChip chip;
+  for (std::size_t i : idx) {
+    if (input.cameras.count(track[i].camera_id)) continue;
+    chip.run = UnfittableChip(track, idx, track[i].camera_id);
+    chip.run.begins = marks.near[PreviousGood(marks, launch)] ? "robot" : "kick";
+    return chip;
+  }
+  const std::optional<ChipTrial> trial = FitChipAfter(track, marks, input, options, launch, idx, law, noise);
+  if (!trial) return std::nullopt;
   chip.data = trial->problem.Chip(0);
   chip.launch = trial->x.locals[0];
   chip.loss = trial->x.globals;
   chip.landed = LastLanding(chip.launch, chip.loss, chip.data.hops, options.gravity);
   SetChipRun(track, chip.data, chip.launch, options, chip.run);
   // Airborne only if the flight shows: its apex, and how far the cameras see it off the carpet. A
-  // fit that bounces on and on (damping_z near 1) is a ball on the carpet the hops imitate.
+  // fit that bounces on and on (damping_z near 1) is a ball on the carpet the hops imitate, and one
+  // far off the detections is no near miss worth reporting.
+  const double limit = std::max(1.5 * noise, noise + 0.002);
   if (chip.run.apex < options.chip_min_apex || Swing(trial->problem, trial->x) < std::max(6 * noise, 0.015) ||
-      chip.loss[0] > 0.9 || chip.data.hops >= 12) {
+      chip.loss[0] > 0.9 || chip.data.hops >= 12 || trial->rms > 5 * limit) {
     return std::nullopt;
   }
   chip.run.begins = marks.near[PreviousGood(marks, launch)] ? "robot" : "kick";
   chip.run.ends = "rolling";
   chip.run.rms = trial->rms;
   const double first_landing = chip.launch[kLaunchTime] + 2 * chip.launch[kVz] / options.gravity;
-  const double limit = std::max(1.5 * noise, noise + 0.002);
-  if (trial->rms > 5 * limit) return std::nullopt;  // not a near miss: nothing airborne to report
   if (trial->rms > limit || trial->dropped > 0.05) {
     chip.run.reason = Format("airborne, but the hop model does not fit: rms %.1f mm (noise %.1f mm), %.0f %% of "
                              "the detections off it", 1e3 * trial->rms, 1e3 * noise, 100 * trial->dropped);
@@ -1835,11 +1858,10 @@ std::vector<FoundChip> FindChips(const std::vector<TrackPoint>& track, const Tra
   double busy_until = -kInf;
   for (std::size_t launch : Launches(track, marks, options)) {
     if (track[launch].t < busy_until || Explained(runs, track[launch].t, typical)) continue;
-    if (getenv("CHIPDEBUG")) for (const BallRun& r : runs) if (std::abs(r.t_begin - track[launch].t) < 0.2) std::fprintf(stderr, "unexplained %.3f: run %.3f-%.3f used %d rms %.4f typical %.4f reason %s\n", track[launch].t, r.t_begin, r.t_end, r.used, r.rms, typical, r.reason.c_str());
     std::optional<FoundChip> chip = TryChip(track, marks, input, options, launch, law, noise);
     if (!chip) continue;
+    busy_until = chip->run.t_end;  // one trial per flight, even when a later launch point is in it
     if (chip->run.reason.empty()) {
-      busy_until = chip->run.t_end;
       TakeOutFlight(track, marks, options, *chip, runs);
       chips.push_back(*chip);
     } else {
@@ -2108,13 +2130,10 @@ BallFit FitBall(const BallFitInput& input, const BallFitOptions& options) {
     fit.problems.push_back(Format("the ball track has only %zu detections", track.size()));
     return fit;
   }
-  auto T0 = std::chrono::steady_clock::now(); auto lap = [&](const char* w) { if (!getenv("TIMING")) return; auto t = std::chrono::steady_clock::now(); std::fprintf(stderr, "%s %.3f\n", w, std::chrono::duration<double>(t - T0).count()); T0 = t; };
   const TrackMarks marks = MarkTrack(track, input, options);
-  lap("marks");
   fit.noise = marks.noise;
   std::vector<KickPoint> kicks;
   fit.runs = CandidateRuns(track, marks, input, options, kicks);
-  lap("candidates");
   auto by_time = [](const BallRun& a, const BallRun& b) { return a.t_begin < b.t_begin; };
   const int usable = CountUsable(fit.runs);
   if (usable < std::max(options.min_runs, 1)) {
@@ -2123,20 +2142,16 @@ BallFit FitBall(const BallFitInput& input, const BallFitOptions& options) {
     return fit;
   }
   GroundResult ground = FitGround(track, marks, options, fit.runs, kicks, GroundLaw{}, false);
-  lap("ground1");
   if (TooFewUsed(fit.runs, options, fit)) return fit;
   const double noise = std::isfinite(ground.sigma) ? ground.sigma : marks.noise;
   std::vector<FoundChip> chips = FindChips(track, marks, input, options, LawOf(ground.x.globals), noise, fit.runs);
-  lap("chips");
   // Again without the flights, now with intervals.
   ground = FitGround(track, marks, options, fit.runs, kicks, LawOf(ground.x.globals), true);
-  lap("ground2");
   if (TooFewUsed(fit.runs, options, fit)) return fit;
   fit.enough_data = true;
   fit.rms_residual = UsedRms(fit.runs);
   GroundEstimates(ground, input, options, fit);
   FitChipsJointly(track, chips, LawOf(ground.x.globals), options, fit);
-  lap("joint chips");
   for (FoundChip& chip : chips) fit.runs.push_back(chip.run);
   std::stable_sort(fit.runs.begin(), fit.runs.end(), by_time);
   return fit;
@@ -2160,20 +2175,24 @@ std::string EstimateRow(const std::string& name, const Estimate& e, const std::s
          " |\n";
 }
 
-// Up to `count` used ground runs spread over the start speeds, dated kicks first.
-std::vector<const BallRun*> SampleRuns(const BallFit& fit, std::size_t count) {
-  std::vector<const BallRun*> pool;
-  for (bool kick : {true, false}) {
-    for (const BallRun& r : fit.runs) {
-      if (r.used && !r.airborne && r.kick_seen == kick) pool.push_back(&r);
-    }
-    if (pool.size() >= count) break;
-  }
+// Up to `count` runs of `pool` spread evenly over their speeds.
+std::vector<const BallRun*> SpreadOverSpeed(std::vector<const BallRun*> pool, std::size_t count) {
   std::sort(pool.begin(), pool.end(), [](const BallRun* a, const BallRun* b) { return a->v_ref < b->v_ref; });
   if (pool.size() <= count) return pool;
   std::vector<const BallRun*> out;
-  for (std::size_t k = 0; k < count; ++k) out.push_back(pool[k * (pool.size() - 1) / (count - 1)]);
+  for (std::size_t k = 0; k < count; ++k) out.push_back(pool[k * (pool.size() - 1) / std::max<std::size_t>(1, count - 1)]);
   return out;
+}
+
+// The runs the report draws: up to three after dated kicks and one more, over the speeds seen.
+std::vector<const BallRun*> SampleRuns(const BallFit& fit) {
+  std::vector<const BallRun*> kicked, other;
+  for (const BallRun& r : fit.runs) {
+    if (r.used && !r.airborne) (r.kick_seen ? kicked : other).push_back(&r);
+  }
+  std::vector<const BallRun*> sample = SpreadOverSpeed(kicked, 3);
+  for (const BallRun* r : SpreadOverSpeed(other, 4 - sample.size())) sample.push_back(r);
+  return sample;
 }
 
 double ModelAlong(const BallRun& run, const BallFit& fit, double t) {
@@ -2218,24 +2237,20 @@ void SpeedSeries(const std::vector<TrackPoint>& track, const BallRun& run, const
   }
 }
 
-validation::Plot SpeedPlot(const std::vector<TrackPoint>& track, const BallFit& fit) {
+// One run's speed along its line: from the detections, and by the fitted law.
+validation::Plot SpeedPlot(const std::vector<TrackPoint>& track, const BallFit& fit, const BallRun& run, int number) {
   validation::Plot plot;
-  plot.file = "ball-speed.svg";
-  plot.title = "Ball speed along the run: detections and the fitted two-phase law";
-  plot.x_label = "time since the kick (or the run's start), s";
-  plot.y_label = "speed, m/s";
-  const std::vector<const BallRun*> sample = SampleRuns(fit, 6);
-  std::vector<validation::Series> data(sample.size()), law(sample.size());
-  for (std::size_t k = 0; k < sample.size(); ++k) {
-    SpeedSeries(track, *sample[k], fit, data[k], law[k]);
-    data[k].label = Format("t = %.1f s", sample[k]->t_begin);
-    data[k].points = true;
-    law[k].label = "fit";
-  }
-  // Six colours cycle: data k and its law k + 6 share one.
-  for (auto& s : data) plot.series.push_back(std::move(s));
-  for (std::size_t k = data.size(); k < 6 && !law.empty(); ++k) plot.series.push_back({"", {}, {}});
-  for (auto& s : law) plot.series.push_back(std::move(s));
+  plot.file = Format("ball-run-%d.svg", number);
+  plot.title = run.kick_seen ? Format("Run at t = %.1f s: kicked at %.2f m/s, slides %.2f s, then rolls", run.t_begin,
+                                      run.v_ref, run.slide_time)
+                             : Format("Run at t = %.1f s (%s): slides %.2f s more, then rolls", run.t_begin,
+                                      run.begins.c_str(), run.slide_time);
+  plot.x_label = run.kick_seen ? "time since the kick, s" : "time since the run's first detection, s";
+  plot.y_label = "speed along the run, m/s";
+  validation::Series data{"detections (0.1 s line fits)", {}, {}}, law{"fitted two-phase law", {}, {}};
+  data.points = true;
+  SpeedSeries(track, run, fit, data, law);
+  plot.series = {data, law};
   return plot;
 }
 
@@ -2370,17 +2385,12 @@ std::string ChipSection(const BallFit& fit) {
   return md.str();
 }
 
-}  // namespace
-
-ReportSection BallReport(const BallFit& fit, const BallFitInput& input) {
-  ReportSection section;
-  const std::vector<TrackPoint> track = TimeOrdered(input.ball);
+// The opening lines: what the log gave, and what went wrong.
+std::string Summary(const BallFit& fit, const BallFitInput& input) {
+  auto count = [&](auto pred) { return static_cast<int>(std::count_if(fit.runs.begin(), fit.runs.end(), pred)); };
   const int used = CountUsed(fit.runs);
-  const int kicks = static_cast<int>(std::count_if(fit.runs.begin(), fit.runs.end(), [](const BallRun& r) {
-    return r.used && !r.airborne && r.kick_seen;
-  }));
-  const int chips = static_cast<int>(
-      std::count_if(fit.runs.begin(), fit.runs.end(), [](const BallRun& r) { return r.used && r.airborne; }));
+  const int kicks = count([](const BallRun& r) { return r.used && !r.airborne && r.kick_seen; });
+  const int chips = count([](const BallRun& r) { return r.used && r.airborne; });
   std::ostringstream md;
   md << "### Ball\n\n";
   if (!input.source.empty()) md << "Log: `" << input.source << "`. ";
@@ -2393,15 +2403,32 @@ ReportSection BallReport(const BallFit& fit, const BallFitInput& input) {
     for (const std::string& p : fit.problems) md << "- " << p << "\n";
     md << "\n";
   }
+  return md.str();
+}
+
+// The figures: a few runs' speeds under the law, all residuals, up to two chips.
+std::vector<validation::Plot> Plots(const std::vector<TrackPoint>& track, const BallFitInput& input,
+                                   const BallFit& fit) {
+  std::vector<validation::Plot> plots;
+  int number = 0;
+  for (const BallRun* run : SampleRuns(fit)) plots.push_back(SpeedPlot(track, fit, *run, ++number));
+  plots.push_back(ResidualPlot(track, fit));
+  number = 0;
+  for (const BallRun& r : fit.runs) {
+    if (r.used && r.airborne && number < 2) plots.push_back(ChipPlot(track, input, fit, r, ++number));
+  }
+  return plots;
+}
+
+}  // namespace
+
+ReportSection BallReport(const BallFit& fit, const BallFitInput& input) {
+  ReportSection section;
+  std::ostringstream md;
+  md << Summary(fit, input);
   if (fit.enough_data) {
-    md << GroundSection(fit) << ChipSection(fit);
-    md << "#### The fit over the data\n\n";
-    section.plots.push_back(SpeedPlot(track, fit));
-    section.plots.push_back(ResidualPlot(track, fit));
-    int number = 0;
-    for (const BallRun& r : fit.runs) {
-      if (r.used && r.airborne && number < 2) section.plots.push_back(ChipPlot(track, input, fit, r, ++number));
-    }
+    md << GroundSection(fit) << ChipSection(fit) << "#### The fit over the data\n\n";
+    section.plots = Plots(TimeOrdered(input.ball), input, fit);
     for (const validation::Plot& p : section.plots) md << "![" << p.title << "](" << p.file << ")\n\n";
   } else {
     md << "Not enough data for a ball fit: no estimates.\n\n";

@@ -55,7 +55,9 @@ struct BallFitOptions {
 
 /// One candidate free run of the ball (rolling, or a chip's flight), used or rejected, with its fit.
 struct BallRun {
-  std::size_t first = 0, last = 0;  ///< its detections: the time-ordered ball track [first, last)
+  /// Its detections: [first, last) of input.ball with non-finite detections left out and stably
+  /// sorted by time (so input.ball's own indices when it is time-ordered and finite, as it should be).
+  std::size_t first = 0, last = 0;
   double t_begin = 0, t_end = 0;    ///< s, first and last detection
   int points = 0;                   ///< detections the fit used (outliers dropped)
   double start_speed = 0;           ///< m/s at t_begin (fitted; before the fit a local estimate)
@@ -64,10 +66,14 @@ struct BallRun {
   bool airborne = false;            ///< a chip, fitted with the hop model
   bool kick_seen = false;           ///< the run starts at a dated kick, so it constrains k_switch
   bool used = false;                ///< in the final fit
-  std::string begins, ends;         ///< what starts and ends it: robot, kick, turn, gap, slow, track…
+  /// What starts and ends it: "robot" (leaves or enters a robot's reach), "kick" (speed jumps up),
+  /// "turn" (wall, unseen touch), "gap", "slow" (below min_speed), "track" (its end), "chip landing",
+  /// "rolling" (a chip's end); a dated kick adds how it was dated.
+  std::string begins, ends;
   std::string reason;               ///< why it is rejected (empty when used)
   double rms = 0;                   ///< m, residual rms under the final fit (0: not fitted)
-  // Ground runs: s(t) = two-phase law from (t_ref, s_ref, v_ref), sliding for slide_time, along heading.
+  // Ground runs: along the line from (x0, y0) in direction heading, the position at time t is the
+  // two-phase law from (t_ref, s_ref, v_ref): sliding at acc_slide for slide_time, then rolling.
   double t_ref = 0;       ///< s: the kick instant (kick_seen), else t_begin; chips: launch time
   double s_ref = 0;       ///< m, position along the line at t_ref
   double v_ref = 0;       ///< m/s, speed at t_ref (the kick speed when kick_seen)

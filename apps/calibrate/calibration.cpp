@@ -194,6 +194,11 @@ CalibrationOutcome Calibrate(const CalibrateOptions& options, const std::functio
   fits.cameras = camera_future.get();
   fits.perception = PerceptionFromFit(fits.cameras);
   fits.latency = CombinedLatency(fits.robots);
+  fits.camera_positions = session.cameras;
+  if (session.field) {
+    fits.field_length = session.field->length;
+    fits.field_width = session.field->width;
+  }
   outcome.seconds_fitting = Since(t0);
   {
     int robots_fitted = 0;

@@ -14,11 +14,22 @@ namespace ubersim::calibrate {
 namespace fs = std::filesystem;
 namespace {
 
-// Four significant digits: more than any fit here resolves.
-double Round4(double v) {
-  if (v == 0 || !std::isfinite(v)) return v;
-  const double scale = std::pow(10.0, 3 - static_cast<int>(std::floor(std::log10(std::abs(v)))));
-  return std::round(v * scale) / scale;
+// Four significant digits, as text: more than any fit here resolves, and yaml-cpp would turn a
+// double into all seventeen.
+std::string Round4(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+// A length to the millimetre, as text.
+std::string Millimetres(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", std::abs(v) < 5e-4 ? 0.0 : v);
+  std::string s = buf;
+  while (s.size() > 1 && s.back() == '0') s.pop_back();
+  if (s.back() == '.') s.pop_back();
+  return s;
 }
 
 YAML::Node Load(const fs::path& file) {
@@ -74,6 +85,27 @@ struct Setter {
     node[key] = Round4(e.value);
   }
 };
+
+// Each camera's own part of the carpet: the bounding box of the points nearer its nadir than any
+// other's, over the field and 0.3 m beyond (for cameras on a grid, their cells exactly). m.
+std::map<int, Eigen::Vector4d> CameraAreas(const std::map<int, Eigen::Vector3d>& cameras, double length, double width) {
+  std::map<int, Eigen::Vector4d> areas;
+  const double hx = 0.5 * length + 0.3, hy = 0.5 * width + 0.3, step = 0.02;
+  for (double x = -hx; x <= hx + 1e-9; x += step) {
+    for (double y = -hy; y <= hy + 1e-9; y += step) {
+      int nearest = -1;
+      double best = INFINITY;
+      for (const auto& [id, p] : cameras) {
+        const double d = std::hypot(p.x() - x, p.y() - y);
+        if (d < best) best = d, nearest = id;
+      }
+      auto [it, fresh] = areas.try_emplace(nearest, Eigen::Vector4d(x, y, x, y));
+      Eigen::Vector4d& a = it->second;
+      a = Eigen::Vector4d(std::min(a[0], x), std::min(a[1], y), std::max(a[2], x), std::max(a[3], y));
+    }
+  }
+  return areas;
+}
 
 std::string FileName(const RobotKey& k) {
   return std::string("robot-") + (k.team == TeamColour::kBlue ? "blue-" : "yellow-") + std::to_string(k.id) + ".yaml";
@@ -307,6 +339,22 @@ ModelFiles WriteModelFiles(const fs::path& base_world, const fs::path& out_dir, 
       }
     }
     perception["unsynchronised_cameras"] = fits.perception.unsynchronised_cameras;
+    // The cameras as the log's geometry has them, each over its own part of the carpet.
+    if (!fits.camera_positions.empty() && fits.field_length > 0 && fits.field_width > 0) {
+      perception.remove("camera_count");
+      perception.remove("camera_height");
+      YAML::Node list(YAML::NodeType::Sequence);
+      for (const auto& [id, area] : CameraAreas(fits.camera_positions, fits.field_length, fits.field_width)) {
+        const Eigen::Vector3d& p = fits.camera_positions.at(id);
+        YAML::Node c;
+        c.SetStyle(YAML::EmitterStyle::Flow);
+        c["id"] = id;
+        for (double v : {p.x(), p.y(), p.z()}) c["position"].push_back(Millimetres(v));
+        for (int i = 0; i < 4; ++i) c["area"].push_back(Millimetres(area[i]));
+        list.push_back(c);
+      }
+      perception["cameras"] = list;
+    }
     header << "perception: from the camera fit (report.md, Cameras); cameras and keys not fitted as the base has them.\n";
   }
   if (fits.latency.ok()) {

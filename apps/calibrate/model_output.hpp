@@ -14,6 +14,8 @@
 #include "robot_fit.hpp"
 #include "samples.hpp"
 
+#include <Eigen/Core>
+
 namespace ubersim::calibrate {
 
 /// Everything a calibration fitted.
@@ -23,6 +25,9 @@ struct CalibrationFits {
   std::vector<RobotFit> robots;       ///< every robot with data
   CameraFit cameras;                  ///< the vision system
   PerceptionValues perception;        ///< the `perception:` keys from `cameras`
+  /// The cameras where the log's geometry puts them, m (the world's `perception.cameras`).
+  std::map<int, Eigen::Vector3d> camera_positions;
+  double field_length = 0, field_width = 0;  ///< m, from the geometry (0: unknown)
   /// Command-to-motion delay over the robots (latency + wheel lag, the world's `radio.latency`);
   /// samples 0 when unknown.
   Estimate latency;

@@ -109,6 +109,15 @@ TEST(CalibrateCli, ADrillFitsBackTheWorldItWasRecordedIn) {
   EXPECT_NEAR(p["drop"]["ball"].as<double>(), 0.10, 0.02);
   EXPECT_NEAR(p["capture_jitter"].as<double>(), 0.001, 0.0003);
   EXPECT_NEAR(p["dribbler_false_balls"].as<double>(), 0.5, 0.15);
+  // Two cameras 5 m up over the halves (Div B: one 6 m up over the centre), each over its own half.
+  ASSERT_EQ(p["cameras"].size(), 2u) << Slurp(out / "world.yaml");
+  EXPECT_FALSE(p["camera_count"]);
+  for (const auto& c : p["cameras"]) {
+    const double x = c["position"][0].as<double>();
+    EXPECT_NEAR(std::abs(x), 2.4, 1e-3);  // over the halves of the carpet (9.6 m with its margins)
+    EXPECT_NEAR(c["position"][2].as<double>(), 5.0, 1e-3);
+    EXPECT_NEAR(x < 0 ? c["area"][2].as<double>() : c["area"][0].as<double>(), 0.0, 0.021);
+  }
 
   // The fitted world loads, and the report shows the fits and the check.
   const auto validate = RunUbersim("validate " + (out / "world.yaml").string());

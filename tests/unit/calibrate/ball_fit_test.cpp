@@ -216,8 +216,9 @@ std::vector<Camera> TwoCameras() {
 
 std::vector<Camera> OneCamera() { return {{0, 70.0, 0.004, -10, 10, Vector3d(0, 0, 6)}}; }
 
-// A kick (or chip) episode starting at t from a random spot, the ball resting 0.5 s by the robot.
-Episode Kick(double t, bool chip, std::mt19937& rng, const Truth& truth) {
+// A kick (or chip) episode starting at t from a random spot, the ball resting 0.5 s by the robot
+// (a quarter of them hidden by it there, unless `always_hidden`).
+Episode Kick(double t, bool chip, std::mt19937& rng, const Truth& truth, bool always_hidden = false) {
   std::uniform_real_distribution<double> unit(0, 1);
   Episode e;
   e.t_begin = t;
@@ -227,7 +228,7 @@ Episode Kick(double t, bool chip, std::mt19937& rng, const Truth& truth) {
   const double angle = chip ? to_middle + 0.5 * (unit(rng) - 0.5) : 2 * M_PI * unit(rng);
   const Vector2d dir(std::cos(angle), std::sin(angle));
   e.robot = from - 0.1 * dir;
-  e.hidden_at_robot = unit(rng) < 0.25;
+  e.hidden_at_robot = unit(rng) < 0.25 || always_hidden;
   const double t_kick = t + 0.5;
   Piece rest;
   rest.t0 = t;
@@ -246,14 +247,15 @@ Episode Kick(double t, bool chip, std::mt19937& rng, const Truth& truth) {
   return e;
 }
 
-Log MakeLog(int kicks, int chips, std::uint32_t seed, std::vector<Camera> cameras = TwoCameras()) {
+Log MakeLog(int kicks, int chips, std::uint32_t seed, std::vector<Camera> cameras = TwoCameras(),
+            bool always_hidden = false) {
   Log log;
   log.seed = seed;
   log.cameras = std::move(cameras);
   std::mt19937 rng(seed);
   double t = 0.2;
   for (int k = 0; k < kicks + chips; ++k) {
-    log.episodes.push_back(Kick(t, k % 3 == 2 && chips > k / 3, rng, log.truth));
+    log.episodes.push_back(Kick(t, k % 3 == 2 && chips > k / 3, rng, log.truth, always_hidden));
     t = log.episodes.back().t_end + 1.0;  // the ball is carried to the next spot, unseen
   }
   return log;
@@ -364,6 +366,27 @@ TEST(BallFit, ChipsWithoutCameraPositionsAreRejectedWithAReason) {
   EXPECT_GE(unfitted, 4);
   EXPECT_FALSE(fit.damping_z.ok());
   EXPECT_NEAR(fit.acc_slide.value, Truth{}.acc_slide, 0.05 * 2.4);
+}
+
+// With no kick in view and no robots known, no run starts at a kick the fit can date: the
+// decelerations come from the runs alone, the switch is not estimated, and the report says so.
+TEST(BallFit, WithoutDatedKicksTheSwitchIsNotEstimated) {
+  BallFitInput input = MakeLog(14, 0, 31, TwoCameras(), true).Input();
+  input.robot_distance = nullptr;
+  const BallFit fit = FitBall(input);
+  ASSERT_TRUE(fit.enough_data);
+  for (const BallRun& r : fit.runs) EXPECT_FALSE(r.kick_seen);
+  const Truth truth;
+  EXPECT_NEAR(fit.acc_slide.value, truth.acc_slide, 0.05 * std::abs(truth.acc_slide));
+  EXPECT_NEAR(fit.acc_roll.value, truth.acc_roll, 0.08 * std::abs(truth.acc_roll));
+  EXPECT_TRUE(Covers(fit.acc_roll, truth.acc_roll));
+  EXPECT_FALSE(fit.k_switch.ok());
+  EXPECT_FALSE(fit.inertia_factor.ok());
+  EXPECT_FALSE(fit.rolling_friction.ok());
+  EXPECT_TRUE(fit.mu.ok());
+  bool said = false;
+  for (const std::string& p : fit.problems) said = said || p.find("k_switch not estimated") != std::string::npos;
+  EXPECT_TRUE(said);
 }
 
 TEST(BallFit, TooFewRunsGiveNoFit) {
