@@ -34,10 +34,14 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <numbers>
+#include <map>
 #include <numeric>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -292,9 +296,8 @@ void MarkBreaks(const std::vector<TrackPoint>& track, const BallFitOptions& opti
     const int id = static_cast<int>(marks.break_kind.size());
     marks.break_kind.push_back(best_kick ? "kick" : "turn");
     const double tb = track[best].t;
-    for (std::size_t j = FirstAtOrAfter(track, tb - kBreakTrim); j < track.size() && track[j].t <= tb + kBreakTrim; ++j) {
-      marks.brk[j] = id;
-    }
+    const std::size_t end = FirstAfter(track, tb + kBreakTrim);
+    for (std::size_t j = FirstAtOrAfter(track, tb - kBreakTrim); j < end; ++j) marks.brk[j] = id;
     best = kNone;
     best_score = 0;
   };
@@ -1098,7 +1101,9 @@ double UpdateOutliers(GroundProblem& problem, Params& x, const Selection& sel, d
   const double sigma = std::max(1e-5, RobustSigma(std::move(all)));
   for (std::size_t b = 0; b < residuals.size(); ++b) {
     GroundData& d = problem.Run(b);
-    for (std::size_t i = 0; i < d.w.size(); ++i) d.w[i] = std::abs(residuals[b][static_cast<Eigen::Index>(i)]) <= sigmas * sigma;
+    for (std::size_t i = 0; i < d.w.size(); ++i) {
+      d.w[i] = std::abs(residuals[b][static_cast<Eigen::Index>(i)]) <= sigmas * sigma;
+    }
   }
   return sigma;
 }
@@ -1911,9 +1916,9 @@ void GroundEstimates(const GroundResult& ground, const BallFitInput& input, cons
   const Vector3d g = ground.x.globals;
   const std::array<int, 3>& n = ground.informers;
   Estimate* out[] = {&fit.acc_slide, &fit.acc_roll, &fit.k_switch};
-  for (int j = 0; j < 3; ++j) {
-    const Vector3d e = Vector3d::Unit(j);
-    *out[j] = Derived(g[j], e, ground, ground.sel.globals[static_cast<std::size_t>(j)] ? n[static_cast<std::size_t>(j)] : 0);
+  for (std::size_t j = 0; j < 3; ++j) {
+    const auto k = static_cast<Eigen::Index>(j);
+    *out[j] = Derived(g[k], Vector3d::Unit(k), ground, ground.sel.globals[j] ? n[j] : 0);
   }
   const double grav = options.gravity, r = input.ball_radius;
   fit.mu = Derived(-g[0] / grav, Vector3d(-1 / grav, 0, 0), ground, fit.acc_slide.samples);
@@ -1921,12 +1926,12 @@ void GroundEstimates(const GroundResult& ground, const BallFitInput& input, cons
   const double rho = -g[1] * r / (grav * g[2]);
   fit.rolling_friction = Derived(rho, Vector3d(0, -r / (grav * g[2]), g[1] * r / (grav * g[2] * g[2])), ground,
                                  std::min(fit.acc_roll.samples, fit.k_switch.samples));
-  const char* names[] = {"acc_slide", "acc_roll", "k_switch"};
-  const char* needs[] = {"sliding for 5 detections", "rolling for 0.2 s", "starting at a dated kick and sliding into rolling"};
+  const char* what[] = {"acc_slide not estimated (nor mu)", "acc_roll not estimated (nor rolling_friction)",
+                        "k_switch not estimated (nor inertia_factor, rolling_friction)"};
+  const char* needs[] = {"sliding for 5 detections", "rolling for 0.2 s",
+                         "starting at a dated kick and sliding into rolling"};
   for (std::size_t j = 0; j < 3; ++j) {
-    if (!ground.sel.globals[j]) {
-      fit.problems.push_back(Format("no used run was seen %s: %s not estimated", needs[j], names[j]));
-    }
+    if (!ground.sel.globals[j]) fit.problems.push_back(Format("no used run was seen %s: %s", needs[j], what[j]));
   }
 }
 
@@ -2101,7 +2106,8 @@ int CountUsable(const std::vector<BallRun>& runs) {
 }
 
 int CountUsed(const std::vector<BallRun>& runs) {
-  return static_cast<int>(std::count_if(runs.begin(), runs.end(), [](const BallRun& r) { return !r.airborne && r.used; }));
+  return static_cast<int>(
+      std::count_if(runs.begin(), runs.end(), [](const BallRun& r) { return !r.airborne && r.used; }));
 }
 
 double UsedRms(const std::vector<BallRun>& runs) {
@@ -2147,7 +2153,15 @@ BallFit FitBall(const BallFitInput& input, const BallFitOptions& options) {
   std::vector<FoundChip> chips = FindChips(track, marks, input, options, LawOf(ground.x.globals), noise, fit.runs);
   // Again without the flights, now with intervals.
   ground = FitGround(track, marks, options, fit.runs, kicks, LawOf(ground.x.globals), true);
-  if (TooFewUsed(fit.runs, options, fit)) return fit;
+  if (TooFewUsed(fit.runs, options, fit)) {
+    for (FoundChip& chip : chips) {
+      chip.run.used = false;
+      chip.run.reason = "not fitted: too few ground runs for the roll after the hops";
+      fit.runs.push_back(chip.run);
+    }
+    std::stable_sort(fit.runs.begin(), fit.runs.end(), by_time);
+    return fit;
+  }
   fit.enough_data = true;
   fit.rms_residual = UsedRms(fit.runs);
   GroundEstimates(ground, input, options, fit);
@@ -2180,7 +2194,9 @@ std::vector<const BallRun*> SpreadOverSpeed(std::vector<const BallRun*> pool, st
   std::sort(pool.begin(), pool.end(), [](const BallRun* a, const BallRun* b) { return a->v_ref < b->v_ref; });
   if (pool.size() <= count) return pool;
   std::vector<const BallRun*> out;
-  for (std::size_t k = 0; k < count; ++k) out.push_back(pool[k * (pool.size() - 1) / std::max<std::size_t>(1, count - 1)]);
+  for (std::size_t k = 0; k < count; ++k) {
+    out.push_back(pool[k * (pool.size() - 1) / std::max<std::size_t>(1, count - 1)]);
+  }
   return out;
 }
 

@@ -8,9 +8,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <random>
+#include <vector>
 
 namespace ubersim::calibrate {
 namespace {
@@ -196,7 +198,8 @@ BallFitInput Log::Input() const {
       input.ball.push_back({t, seen.x() + gauss(rng), seen.y() + gauss(rng), 0, cam.id});
     }
   }
-  std::stable_sort(input.ball.begin(), input.ball.end(), [](const TrackPoint& a, const TrackPoint& b) { return a.t < b.t; });
+  std::stable_sort(input.ball.begin(), input.ball.end(),
+                   [](const TrackPoint& a, const TrackPoint& b) { return a.t < b.t; });
   for (int k = 0; k < strays && !input.ball.empty(); ++k) {
     TrackPoint& p = input.ball[rng() % input.ball.size()];
     const double angle = 2 * M_PI * unit(rng), distance = 0.15 + 0.35 * unit(rng);
