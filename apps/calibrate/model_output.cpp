@@ -107,6 +107,8 @@ std::map<int, Eigen::Vector4d> CameraAreas(const std::map<int, Eigen::Vector3d>&
   return areas;
 }
 
+constexpr int kMinChips = 3;  // fewer chips: their dampings are reported, not written
+
 std::string FileName(const RobotKey& k) {
   return std::string("robot-") + (k.team == TeamColour::kBlue ? "blue-" : "yellow-") + std::to_string(k.id) + ".yaml";
 }
@@ -244,7 +246,9 @@ ModelFiles WriteModelFiles(const fs::path& base_world, const fs::path& out_dir, 
     const Estimate rho = RollingFriction(fits.ball.acc_roll, k, radius);
     Set(ball["surface"], "mu", fits.ball.mu, 0, 1000);
     Set(ball["surface"], "rolling_friction", rho, 0, 0.1);
-    Set(ball["surface"], "bounce", fits.ball.damping_z, 0, 1);
+    // Chips: written from three on (one chip's dampings are one bounce's, not the ball's).
+    const Estimate bounce = fits.ball.damping_z.samples >= kMinChips ? fits.ball.damping_z : Estimate{};
+    Set(ball["surface"], "bounce", bounce, 0, 1);
     std::ostringstream h;
     h << "SPDX-License-Identifier: Apache-2.0\nFitted by `ubersim calibrate` to " << fits.source << ", over "
       << ball_base.filename().string() << " (" << fits.ball.runs.size() << " candidate runs; report.md).\n"
@@ -272,7 +276,7 @@ ModelFiles WriteModelFiles(const fs::path& base_world, const fs::path& out_dir, 
         if ((a == "ball" && b == "carpet") || (a == "carpet" && b == "ball")) {
           Set(m, "mu", fits.ball.mu, 0, 1000);
           Set(m, "rolling_friction", RollingFriction(fits.ball.acc_roll, k, radius), 0, 0.1);
-          Set(m, "bounce", fits.ball.damping_z, 0, 1);
+          Set(m, "bounce", bounce, 0, 1);
         }
       }
     }
@@ -369,7 +373,7 @@ ModelFiles WriteModelFiles(const fs::path& base_world, const fs::path& out_dir, 
       Set(straight, "acc_slide", fits.ball.acc_slide, -100, 0);
       Set(straight, "acc_roll", fits.ball.acc_roll, -100, 0);
       Set(straight, "k_switch", fits.ball.k_switch, 0, 1);
-      if (fits.ball.damping_z.ok()) {
+      if (fits.ball.damping_z.samples >= kMinChips) {
         YAML::Node chip = t["ball_model"]["chip_fixed_loss"];
         Set(chip, "damping_xy_first_hop", fits.ball.damping_xy_first_hop, 0, 1);
         Set(chip, "damping_xy_other_hops", fits.ball.damping_xy_other_hops, 0, 1);
