@@ -12,6 +12,7 @@
 #include "ssl_log.hpp"
 #include "ssl_simulation_robot_control.pb.h"
 #include "ssl_vision_wrapper.pb.h"
+#include "vision_packets.hpp"
 
 namespace {
 
@@ -51,34 +52,16 @@ std::string Detection(int camera, int frame, double t_capture, double latency, d
   return p.SerializeAsString();
 }
 
+// The geometry as ÜberSim's vision transport builds it: two cameras 6 m up over the halves.
 std::string Geometry() {
-  SSL_WrapperPacket p;
-  auto* g = p.mutable_geometry();
-  auto* f = g->mutable_field();
-  f->set_field_length(9000);
-  f->set_field_width(6000);
-  f->set_goal_width(1000);
-  f->set_goal_depth(180);
-  f->set_boundary_width(300);
-  for (int id : {0, 1}) {
-    auto* c = g->add_calib();
-    c->set_camera_id(id);
-    c->set_focal_length(390);
-    c->set_principal_point_x(300);
-    c->set_principal_point_y(300);
-    c->set_distortion(0);
-    c->set_q0(0);
-    c->set_q1(0);
-    c->set_q2(0);
-    c->set_q3(1);
-    c->set_tx(0);
-    c->set_ty(0);
-    c->set_tz(0);
-    c->set_derived_camera_world_tx(id == 0 ? -2250.f : 2250.f);
-    c->set_derived_camera_world_ty(0);
-    c->set_derived_camera_world_tz(6000);
-  }
-  return p.SerializeAsString();
+  ubersim::ssl_vision::GeometryInputs in;
+  in.field.field_length = 9.0;
+  in.field.field_width = 6.0;
+  in.field.goal_width = 1.0;
+  in.field.goal_depth = 0.18;
+  in.field.boundary_width = 0.3;
+  in.cameras = {{0, ubersim::Vec3(-2.25, 0, 6)}, {1, ubersim::Vec3(2.25, 0, 6)}};
+  return ubersim::ssl_vision::GeometryPacket(in).SerializeAsString();
 }
 
 std::string Commands(double forward, bool global) {
