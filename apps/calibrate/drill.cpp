@@ -52,7 +52,6 @@ struct RobotDrill {
   std::size_t phase = 0;
   double phase_start = 0;
   int round = 0;
-  LocalVelocityCommand command;
 };
 
 // The command toward a pose: proportional, capped, in the robot's frame.
@@ -153,6 +152,7 @@ DrillSummary RunDrill(kernel::World& world, const std::string& log_path, const D
   if (!start.field) throw std::runtime_error("the drill's world has no field");
   const double length = start.field->field_length, width = start.field->field_width;
   const double lane_span = 0.5 * width - 0.55;
+  const double lane_start = -0.5 * length + 0.9;  // m: where every lane begins, 0.9 m in from the goal line
   if (options.robots < 0 || options.robots > 16 ||
       (options.robots > 1 && lane_span / (options.robots - 1) < 0.3)) {
     throw std::runtime_error("the drill's " + std::to_string(options.robots) +
@@ -168,7 +168,7 @@ DrillSummary RunDrill(kernel::World& world, const std::string& log_path, const D
     RobotDrill d;
     d.id = k;
     d.lane_y = -0.4 - (options.robots > 1 ? lane_span * k / (options.robots - 1) : 0.0);
-    d.phases = Round(-0.5 * length + 0.9, d.lane_y, options.top_speed_command, options.spin_command, options);
+    d.phases = Round(lane_start, d.lane_y, options.top_speed_command, options.spin_command, options);
     robots.push_back(std::move(d));
   }
   // Everyone else leaves the field; the drill's robots start in their lanes.
@@ -183,7 +183,7 @@ DrillSummary RunDrill(kernel::World& world, const std::string& log_path, const D
       // The kicker waits off the field until the first kick puts it behind the ball.
       e.present = false;
     } else {
-      e.position = Vec3(-0.5 * length + 0.9, mine->lane_y, 0.0);
+      e.position = Vec3(lane_start, mine->lane_y, 0.0);
       e.yaw = 0.0;
     }
     world.events().Post(e);
@@ -234,23 +234,24 @@ DrillSummary RunDrill(kernel::World& world, const std::string& log_path, const D
             // The next round at the other speed.
             ++d.round;
             const bool part = d.round % 2 == 1;
-            d.phases = Round(-0.5 * length + 0.9, d.lane_y, part ? options.part_speed_command : options.top_speed_command,
+            d.phases = Round(lane_start, d.lane_y, part ? options.part_speed_command : options.top_speed_command,
                              part ? 0.45 * options.spin_command : options.spin_command, options);
           }
           p = &d.phases[d.phase];
           if (p->kind == Phase::Kind::kHold && (p->forward != 0 || p->left != 0 || p->angular != 0)) ++summary.steps;
         }
-        d.command = p->kind == Phase::Kind::kGoTo ? Toward(*it, *p) : LocalVelocityCommand{p->forward, p->left, p->angular};
+        const LocalVelocityCommand command =
+            p->kind == Phase::Kind::kGoTo ? Toward(*it, *p) : LocalVelocityCommand{p->forward, p->left, p->angular};
         CommandEvent c;
         c.robot = {Team::kBlue, d.id};
-        c.move = d.command;
+        c.move = command;
         world.events().Post(c);
         RobotCommand* rc = control.add_robot_commands();
         rc->set_id(static_cast<std::uint32_t>(d.id));
         auto* local = rc->mutable_move_command()->mutable_local_velocity();
-        local->set_forward(static_cast<float>(d.command.forward));
-        local->set_left(static_cast<float>(d.command.left));
-        local->set_angular(static_cast<float>(d.command.angular));
+        local->set_forward(static_cast<float>(command.forward));
+        local->set_left(static_cast<float>(command.left));
+        local->set_angular(static_cast<float>(command.angular));
       }
       if (options.commands && control.robot_commands_size() > 0) {
         writer.Write(offset_ns + world.clock().time_ns(), kRobotControlBlueRecord, control.SerializeAsString());
