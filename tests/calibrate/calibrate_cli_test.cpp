@@ -9,6 +9,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -52,7 +53,8 @@ TEST(CalibrateCli, ADrillFitsBackTheWorldItWasRecordedIn) {
   EXPECT_NE(drill.output.find("recorded"), std::string::npos) << drill.output;
 
   const fs::path out = dir / "fit";
-  const auto fit = RunUbersim("calibrate " + log.string() + " --out " + out.string() + " --geometry-models --check");
+  const auto fit =
+      RunUbersim("calibrate " + log.string() + " --out " + out.string() + " --geometry-models --check --dump-tracks");
   ASSERT_EQ(fit.exit_code, 0) << fit.output;
   const YAML::Node world = YAML::LoadFile((out / "world.yaml").string());
 
@@ -127,6 +129,12 @@ TEST(CalibrateCli, ADrillFitsBackTheWorldItWasRecordedIn) {
                            "## Check: the fitted world against the log", "Over "}) {
     EXPECT_NE(report.find(part), std::string::npos) << part;
   }
+  // --dump-tracks: what the fits saw, as CSV with a header row.
+  for (const char* csv : {"ball.csv", "cameras.csv", "robot-blue-0.csv", "commands-blue-0.csv"}) {
+    const std::string text = Slurp(out / "tracks" / csv);
+    EXPECT_GT(std::count(text.begin(), text.end(), '\n'), 2) << csv;
+  }
+  EXPECT_EQ(Slurp(out / "tracks" / "commands-blue-0.csv").rfind("t,forward,left,angular,", 0), 0u);
   int svgs = 0;
   for (const auto& e : fs::directory_iterator(out)) svgs += e.path().extension() == ".svg" ? 1 : 0;
   EXPECT_GE(svgs, 5);
@@ -160,6 +168,8 @@ TEST(CalibrateCli, ADamagedLogNamesTheRecordAndItsByteOffset) {
   EXPECT_EQ(missing.exit_code, 1) << missing.output;
   EXPECT_NE(missing.output.find("none.log"), std::string::npos) << missing.output;
   EXPECT_EQ(RunUbersim("calibrate").exit_code, 2);
+  EXPECT_EQ(RunUbersim("calibrate " + log.string() + " --min-runs 0").exit_code, 2);
+  EXPECT_EQ(RunUbersim("calibrate " + log.string() + " --drill " + (dir / "d.log").string()).exit_code, 2);
 }
 
 }  // namespace
