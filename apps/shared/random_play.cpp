@@ -23,7 +23,7 @@ RandomPlay::RandomPlay(World& world, std::uint64_t seed, std::optional<Team> tea
   const FieldGeometry& f = world.model().field->geometry;
   half_length_ = 0.5 * f.field_length;
   half_width_ = 0.5 * f.field_width;
-  const std::vector<RobotState> robots = world.GroundTruth().robots;
+  const std::vector<RobotState> robots = world.Kinematics().robots;
   for (std::size_t i = 0; i < robots.size(); ++i) {
     const RobotState& r = robots[i];
     if (team && r.id.team != *team) continue;
@@ -56,7 +56,8 @@ bool RandomPlay::BeforeStep() {
   const std::int64_t now = world_.clock().time_ns();
   if (now < next_radio_ns_ && now < next_ball_ns_) return false;
   bool ball_moved = false;
-  const WorldSnapshot s = world_.GroundTruth();
+  // Poses only: the parts' reports (drive feedback above all) would be most of this play's cost.
+  const WorldSnapshot s = world_.Kinematics();
   if (now >= next_radio_ns_) {
     next_radio_ns_ = now + kRadioPeriodNs;
     std::bernoulli_distribution kick(0.02);

@@ -27,6 +27,7 @@ EventQueue& World::events() { return impl_->events(); }
 ClockControl& World::clock_control() { return impl_->clock_control(); }
 const SimClock& World::clock() const { return impl_->clock(); }
 WorldSnapshot World::GroundTruth() const { return impl_->GroundTruth(); }
+WorldSnapshot World::Kinematics() const { return impl_->Kinematics(); }
 std::uint64_t World::StateHash() const { return impl_->StateHash(); }
 const WorldModel& World::model() const { return impl_->model(); }
 std::size_t World::robot_count() const { return impl_->robot_count(); }

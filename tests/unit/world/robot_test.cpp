@@ -208,6 +208,31 @@ TEST(Robot, TheDrivesFeedbackIsInTheGroundTruth) {
   EXPECT_FALSE(world.GroundTruth().robots[0].drive);
 }
 
+// Kinematics is the ground truth's poses and velocities, bit for bit, without asking the parts.
+TEST(Robot, KinematicsIsTheGroundTruthWithoutThePartsReports) {
+  Fixture f;
+  World world(OneRobotWorld(), f.registry, f.log, false);
+  world.events().Post(CommandEvent{{Team::kBlue, 3}, LocalVelocityCommand{0.3, 0.5, 1.0}, {}, {}});
+  for (int i = 0; i < 200; ++i) world.Step();
+  const WorldSnapshot truth = world.GroundTruth();
+  const WorldSnapshot kinematics = world.Kinematics();
+  ASSERT_EQ(kinematics.robots.size(), truth.robots.size());
+  ASSERT_EQ(kinematics.robots.size(), 1u);
+  const RobotState& k = kinematics.robots[0];
+  const RobotState& t = truth.robots[0];
+  EXPECT_EQ(k.id, t.id);
+  EXPECT_TRUE(k.present);
+  EXPECT_EQ(k.pose.position, t.pose.position);
+  EXPECT_EQ(k.pose.orientation.coeffs(), t.pose.orientation.coeffs());
+  EXPECT_EQ(k.twist.linear, t.twist.linear);
+  EXPECT_EQ(k.twist.angular, t.twist.angular);
+  EXPECT_GT(k.twist.linear.norm(), 0.1);  // moving: the comparison compares something
+  EXPECT_EQ(kinematics.ball.pose.position, truth.ball.pose.position);
+  EXPECT_EQ(kinematics.step, truth.step);
+  ASSERT_TRUE(t.drive);
+  EXPECT_FALSE(k.drive);
+}
+
 TEST(Robot, ADriveWhoseFeedbackThrowsOrIsNotFiniteIsSwitchedOff) {
   for (PushDrive::Defect defect : {PushDrive::Defect::kThrow, PushDrive::Defect::kNaN}) {
     Fixture f;

@@ -100,6 +100,10 @@ class World {
   const SimClock& clock() const;
   /// Ground truth now: every robot and the ball as they are (what transports are handed).
   WorldSnapshot GroundTruth() const;
+  /// Where everything is: GroundTruth without what the robots' parts report (no drive feedback,
+  /// dribbler contact or kicker readiness), a fraction of its cost. What cameras and a play that
+  /// only steers need.
+  WorldSnapshot Kinematics() const;
   /// A hash of every body's position, orientation and velocities, bit for bit.
   std::uint64_t StateHash() const;
 
