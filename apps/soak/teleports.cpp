@@ -103,7 +103,11 @@ Vec3 RandomTeleports::RandomFreePoint(double radius) {
   const WorldSnapshot s = world_.GroundTruth();
   Vec3 p = Vec3::Zero();
   for (int attempt = 0; attempt < 100; ++attempt) {
-    p = Vec3(x(rng_), y(rng_), 0.0);
+    // One draw a statement: the order of a call's arguments is the compiler's, and a seed must
+    // give one run whatever built it. y first, as gcc evaluated the old one-call form.
+    const double py = y(rng_);
+    const double px = x(rng_);
+    p = Vec3(px, py, 0.0);
     bool clear = Free(p, radius + 0.02);
     for (const RobotState& r : s.robots) {
       if (clear && (r.pose.position - p).head<2>().norm() < r.radius + radius + 0.05) clear = false;
