@@ -37,7 +37,7 @@ const char* ToString(TeleportKind kind) {
 
 RandomTeleports::RandomTeleports(World& world, std::uint64_t seed, double mean_interval, double wall_overlap)
     : world_(world), rng_(seed), mean_interval_(mean_interval), wall_overlap_(wall_overlap) {
-  for (const RobotState& r : world.GroundTruth().robots) {
+  for (const RobotState& r : world.Kinematics().robots) {
     robots_.push_back(r.id);
     robot_radius_ = r.radius;
   }
@@ -100,7 +100,7 @@ bool RandomTeleports::Free(const Vec3& p, double radius) const {
 Vec3 RandomTeleports::RandomFreePoint(double radius) {
   const Vec3 half = WalledHalfExtents(*world_.model().field);
   std::uniform_real_distribution<double> x(-half.x(), half.x()), y(-half.y(), half.y());
-  const WorldSnapshot s = world_.GroundTruth();
+  const WorldSnapshot s = world_.Kinematics();
   Vec3 p = Vec3::Zero();
   for (int attempt = 0; attempt < 100; ++attempt) {
     // One draw a statement: the order of a call's arguments is the compiler's, and a seed must
@@ -176,7 +176,7 @@ void RandomTeleports::Teleport(TeleportKind kind) {
   ++counts_[static_cast<int>(kind)];
   doing_ = ToString(kind);
   std::uniform_real_distribution<double> unit(0.0, 1.0), angle(-M_PI, M_PI);
-  const WorldSnapshot s = world_.GroundTruth();
+  const WorldSnapshot s = world_.Kinematics();
   const auto state_of = [&](const RobotId& id) -> const RobotState& {
     for (const RobotState& r : s.robots) {
       if (r.id == id) return r;
@@ -303,7 +303,7 @@ void RandomTeleports::Replace(const Target& target) {
     PostBall(RandomFreePoint(ball_radius_), Vec3::Zero());
   } else {
     std::uniform_real_distribution<double> angle(-M_PI, M_PI);
-    const Vec3 ball = world_.GroundTruth().ball.pose.position;
+    const Vec3 ball = world_.Kinematics().ball.pose.position;
     Vec3 p = RandomFreePoint(robot_radius_);
     double yaw = angle(rng_);
     for (int attempt = 0; attempt < 20 && TrapsBall(target.robot, p, yaw, ball); ++attempt) {
