@@ -184,7 +184,13 @@ void RandomTeleports::Teleport(TeleportKind kind) {
     return s.robots.front();
   };
   const Vec3 ball = s.ball.pose.position;
-  const auto spin = [&] { return kRobotSpin * (2.0 * unit(rng_) - 1.0); };
+  // A robot put down moving: its turn rate drawn before its velocity (one draw a statement, as
+  // gcc evaluated the old PostRobot(…, RandomVelocity(…), spin()) call).
+  const auto post_moving = [&](const RobotId& a, const Vec3& p, double yaw, const std::optional<Vec3>& towards) {
+    const double spin = kRobotSpin * (2.0 * unit(rng_) - 1.0);
+    const Vec3 velocity = RandomVelocity(kRobotSpeed, towards);
+    PostRobot(a, p, yaw, velocity, spin);
+  };
   // A point overlapping a wall face by up to `share` of the wall's thickness (at most `reach`,
   // the object's extent towards the wall), its centre in front of the face.
   const auto against_wall = [&](const std::function<double(const Vec3&)>& reach, double share,
@@ -212,7 +218,7 @@ void RandomTeleports::Teleport(TeleportKind kind) {
         const Vec3 p = on + Around(2.0 * robot_radius_ * unit(rng_));
         const double yaw = angle(rng_);
         if (TrapsBall(a, p, yaw, ball) || !Free(p, 0.0) || !Resolvable(p, robot_radius_)) continue;
-        PostRobot(a, p, yaw, RandomVelocity(kRobotSpeed, on - p), spin());
+        post_moving(a, p, yaw, on - p);
         MarkMoved(Target::Robot(b));
         return;
       }
@@ -223,7 +229,7 @@ void RandomTeleports::Teleport(TeleportKind kind) {
         Vec3 normal;
         const std::optional<Vec3> p = against_wall(hull, wall_overlap_, normal);
         if (!p || TrapsBall(a, *p, yaw, ball) || !Resolvable(*p, robot_radius_)) continue;
-        PostRobot(a, *p, yaw, RandomVelocity(kRobotSpeed, -normal), spin());
+        post_moving(a, *p, yaw, -normal);
         return;
       }
       case TeleportKind::kRobotAnywhere: {
@@ -231,7 +237,7 @@ void RandomTeleports::Teleport(TeleportKind kind) {
         const Vec3 p = RandomFreePoint(robot_radius_);
         const double yaw = angle(rng_);
         if (TrapsBall(a, p, yaw, ball)) continue;
-        PostRobot(a, p, yaw, RandomVelocity(kRobotSpeed, std::nullopt), spin());
+        post_moving(a, p, yaw, std::nullopt);
         return;
       }
       case TeleportKind::kBallOntoRobot: {
