@@ -105,12 +105,14 @@ def forward(obs):
 
 
 def test_matches_count_goals_and_repeat_in_process_and_a_failing_policy_is_reported(client):
-    matches = ud.evaluate_matches(client, "div-b", [1, 3], 20.0, blue="scripted", yellow="idle", progress=False)
+    # 40 s: in 20 s the baseline scores on an idle team in about four seeds of ten, in 40 s in
+    # nine of ten (seeds 1-10 measured), so a change that moves the play's last bits keeps a goal.
+    matches = ud.evaluate_matches(client, "div-b", [1, 3], 40.0, blue="scripted", yellow="idle", progress=False)
     assert [m.seed for m in matches] == [1, 3]
     for m in matches:
         assert m.ok, m.error
         assert set(m.goals) == {"blue", "yellow"} and all(isinstance(g, int) for g in m.goals.values())
-        assert m.sim_time == pytest.approx(20.0)
+        assert m.sim_time == pytest.approx(40.0)
         here = ud.play_match(m.seed, m.params, blue="scripted", yellow="idle")
         assert (here.state_hash, here.goals, here.outs) == (m.state_hash, m.goals, m.outs)
     assert sum(m.goals["blue"] for m in matches) >= 1  # the baseline scores on an idle team

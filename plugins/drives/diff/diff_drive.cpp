@@ -262,7 +262,7 @@ class DiffDrive final : public ubersim::Drive {
 
   // A global command's velocity in the robot frame (forward, left), m/s.
   Eigen::Vector2d ToLocal(const ubersim::GlobalVelocityCommand& g) const {
-    return ubersim::ToRobotFrame(ctx_->Chassis().GetPose().Yaw(), g.x, g.y);
+    return ubersim::ToRobotFrame(ubersim::HeadingOf(ctx_->Chassis().GetPose().orientation), g.x, g.y);
   }
 
   // The wheel speeds, left then right (rad/s), that drive the robot at `v` (forward and turning).

@@ -225,6 +225,11 @@ class OmniForceDrive final : public ubersim::Drive {
   }
 
   void PreStep(const ubersim::StepInfo& step) override {
+    // The chassis as the step starts: the servo, the gyro and the wheels all read this one pose.
+    ubersim::Body& chassis = ctx_->Chassis();
+    const ubersim::Pose pose = chassis.GetPose();
+    const ubersim::Twist twist = chassis.GetTwist();
+    const Eigen::Vector2d heading = ubersim::HeadingOf(pose.orientation);
     WheelSpeeds& targets = wheel_targets_;  // wheel speeds, rad/s
     const bool fresh = watchdog_.Fresh(ctx_->SimTime());
     const auto* direct = fresh ? std::get_if<ubersim::WheelSpeedCommand>(&command_) : nullptr;
@@ -237,9 +242,11 @@ class OmniForceDrive final : public ubersim::Drive {
       servo_.Set({Eigen::Vector2d(v.x(), v.y()), v.z()});
       gyro_.Reset();
     } else {
-      const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
+      const ubersim::PlanarVelocity target =
+          fresh ? servo_.ClampToLimits(ubersim::CommandedVelocity(command_, heading)) : ubersim::PlanarVelocity{};
+      const ubersim::PlanarVelocity& set = servo_.Step(target, step.dt);
       // The firmware's gyro holds the heading the setpoint integrates to.
-      const double spin = gyro_.Correct(set.angular, ctx_->Chassis().GetTwist().angular.z(), step.dt);
+      const double spin = gyro_.Correct(set.angular, twist.angular.z(), step.dt);
       // In the frame the robot turns to within the step: driving while turning, it keeps its course.
       const Eigen::Vector2d lin = ubersim::AheadOfTheTurn(set.linear, spin, step.dt);
       targets.noalias() = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
@@ -247,7 +254,7 @@ class OmniForceDrive final : public ubersim::Drive {
       const double peak = targets.cwiseAbs().maxCoeff();
       if (peak > max_wheel_speed_) targets *= max_wheel_speed_ / peak;
     }
-    PushWheels(targets, step.dt);
+    if (Standing(pose.position)) PushWheels(chassis, heading, twist, targets, step.dt);  // in the air: no grip, no support
   }
 
  private:
@@ -260,17 +267,6 @@ class OmniForceDrive final : public ubersim::Drive {
 
   // Whether the robot stands on its wheels, its centre of mass at `position` (see kGripHeight).
   bool Standing(const Vec3& position) const { return position.z() <= rest_height_ + kGripHeight; }
-
-  // The robot's heading as a rotation of the carpet plane: robot frame (x, y) to world (x, y).
-  static Eigen::Matrix2d Heading(const ubersim::Quat& orientation) {
-    const Vec3 forward = orientation * Vec3::UnitX();
-    Eigen::Vector2d c = forward.head<2>();
-    const double length = c.norm();
-    c = length > 1e-9 ? Eigen::Vector2d(c / length) : Eigen::Vector2d(1.0, 0.0);  // pointing straight up: any
-    Eigen::Matrix2d r;
-    r << c.x(), -c.y(), c.y(), c.x();
-    return r;
-  }
 
   Frame WheelFrame(const Vec3& position, const Eigen::Matrix3d& rotation, const Wheel& w) const {
     const Vec3 up = Vec3::UnitZ();  // the carpet's normal
@@ -291,12 +287,11 @@ class OmniForceDrive final : public ubersim::Drive {
   // shares act at wheel_distance on a chassis with less moment of inertia than they would have
   // there, so it overshoots by yaw_gain_ - 1 of the error each step (0.54 on the modern robot)
   // and settles in a few steps (see Configure).
-  void PushWheels(const WheelSpeeds& targets, double dt) {
-    ubersim::Body& chassis = ctx_->Chassis();
-    const ubersim::Pose pose = chassis.GetPose();
-    if (!Standing(pose.position)) return;  // in the air: no grip, no support
-    const ubersim::Twist twist = chassis.GetTwist();
-    const Eigen::Matrix2d heading = Heading(pose.orientation);
+  void PushWheels(ubersim::Body& chassis, const Eigen::Vector2d& heading_unit, const ubersim::Twist& twist,
+                  const WheelSpeeds& targets, double dt) {
+    // The heading as a rotation of the carpet plane: robot frame (x, y) to world (x, y).
+    Eigen::Matrix2d heading;
+    heading << heading_unit.x(), -heading_unit.y(), heading_unit.y(), heading_unit.x();
     const double n = static_cast<double>(wheels_.size());
     const double load = chassis.Mass() / n * ctx_->Gravity().norm();  // N: static, no load transfer
     const double share = chassis.Mass() / n * servo_scale_;            // kg each wheel moves
@@ -322,11 +317,6 @@ class OmniForceDrive final : public ubersim::Drive {
     }
     chassis.AddForce(Vec3(force.x(), force.y(), 0.0) - chassis.Mass() * ctx_->Gravity());
     chassis.AddTorque(Vec3(0.0, 0.0, torque));
-  }
-
-  // The command as (forward, left, angular) in the robot frame, within the speed limits.
-  ubersim::PlanarVelocity TargetLocal() const {
-    return servo_.ClampToLimits(ubersim::CommandedVelocity(command_, ctx_->Chassis()));
   }
 
   ubersim::RobotContext* ctx_ = nullptr;

@@ -67,6 +67,23 @@ inline Eigen::Vector2d ToRobotFrame(double yaw, double x, double y) {
   return {c * x + s * y, -s * x + c * y};
 }
 
+/// The heading of a frame turned by `orientation`, as the unit vector (cos yaw, sin yaw) its
+/// forward axis points along in the carpet plane: (1, 0) when it points straight up or down
+/// (as atan2(0, 0) = 0). Exact where cos and sin of Pose::Yaw() round: no trigonometry.
+inline Eigen::Vector2d HeadingOf(const Quat& orientation) {
+  const Vec3 forward = orientation * Vec3::UnitX();
+  const double length = std::sqrt(forward.x() * forward.x() + forward.y() * forward.y());
+  if (!(length > 0.0)) return Eigen::Vector2d(1.0, 0.0);
+  return Eigen::Vector2d(forward.x() / length, forward.y() / length);
+}
+
+/// A world-frame planar vector (x, y) in the frame of a robot whose heading is the unit vector
+/// `heading` (HeadingOf): (forward, left).
+inline Eigen::Vector2d ToRobotFrame(const Eigen::Vector2d& heading, double x, double y) {
+  const double c = heading.x(), s = heading.y();
+  return {c * x + s * y, -s * x + c * y};
+}
+
 /// A robot-frame velocity setpoint (m/s) turned into the frame the robot will have at the end of
 /// a step of dt (s) turning at `spin` (rad/s): what its wheels must drive now so that, having
 /// turned, it moves as asked. Without it a robot driving while turning drifts across its command
@@ -79,19 +96,28 @@ inline Eigen::Vector2d AheadOfTheTurn(const Eigen::Vector2d& setpoint, double sp
 /// frame and the turn rate about the vertical, from the body's world pose and velocity.
 inline PlanarVelocity LocalPlanarVelocity(const Body& chassis) {
   const Twist t = chassis.GetTwist();
-  return {ToRobotFrame(chassis.GetPose().Yaw(), t.linear.x(), t.linear.y()), t.angular.z()};
+  return {ToRobotFrame(HeadingOf(chassis.GetPose().orientation), t.linear.x(), t.linear.y()), t.angular.z()};
 }
 
-/// What a velocity command asks of the robot, in its own frame: a local command as it is, a
-/// global one turned by the chassis' heading now; wheel speeds ask no velocity (zero).
-inline PlanarVelocity CommandedVelocity(const MoveCommand& command, const Body& chassis) {
+/// What a velocity command asks of a robot whose heading is the unit vector `heading`
+/// (HeadingOf), in its own frame: a local command as it is, a global one turned by the heading;
+/// wheel speeds ask no velocity (zero).
+inline PlanarVelocity CommandedVelocity(const MoveCommand& command, const Eigen::Vector2d& heading) {
   if (const auto* l = std::get_if<LocalVelocityCommand>(&command)) {
     return {Eigen::Vector2d(l->forward, l->left), l->angular};
   }
   if (const auto* g = std::get_if<GlobalVelocityCommand>(&command)) {
-    return {ToRobotFrame(chassis.GetPose().Yaw(), g->x, g->y), g->angular};
+    return {ToRobotFrame(heading, g->x, g->y), g->angular};
   }
   return {};
+}
+
+/// What a velocity command asks of the robot, in its own frame, with the chassis' heading now.
+inline PlanarVelocity CommandedVelocity(const MoveCommand& command, const Body& chassis) {
+  if (std::holds_alternative<GlobalVelocityCommand>(command)) {
+    return CommandedVelocity(command, HeadingOf(chassis.GetPose().orientation));
+  }
+  return CommandedVelocity(command, Eigen::Vector2d(1.0, 0.0));
 }
 
 /// The velocity setpoint a drive follows: targets are clamped to the speed limits, and the
@@ -109,7 +135,8 @@ class VelocityServo {
   /// `target` with its linear speed scaled down to max_speed (direction kept) and its angular
   /// speed clamped to ±max_angular_speed.
   PlanarVelocity ClampToLimits(PlanarVelocity target) const {
-    const double speed = std::hypot(target.linear.x(), target.linear.y());
+    // Not std::hypot: its overflow guard costs ten times the arithmetic, for speeds of m/s.
+    const double speed = std::sqrt(target.linear.x() * target.linear.x() + target.linear.y() * target.linear.y());
     if (speed > limits_.max_speed) {
       target.linear.x() *= limits_.max_speed / speed;
       target.linear.y() *= limits_.max_speed / speed;
