@@ -499,5 +499,28 @@ TEST_P(OmniForceDrive, DrivesTheWheelBodyDrivesPath) {
 
 INSTANTIATE_TEST_SUITE_P(BothProfiles, OmniForceDrive, BothProfiles(), ProfileName);
 
+// The SDK's trig-free heading (servo.hpp): a global command turns into the robot frame as cos and
+// sin of the yaw would turn it, tilted or not, and a frame pointing straight up heads along x.
+TEST(HeadingOf, TurnsAGlobalVectorAsTheYawsCosAndSinDo) {
+  for (double yaw = -3.1; yaw < 3.15; yaw += 0.37) {
+    for (double tilt : {0.0, 0.3}) {
+      const Quat q = Quat(Eigen::AngleAxisd(yaw, Vec3::UnitZ())) * Quat(Eigen::AngleAxisd(tilt, Vec3::UnitY()));
+      const Eigen::Vector2d h = HeadingOf(q);
+      EXPECT_NEAR(h.x(), std::cos(yaw), 1e-12) << yaw << " " << tilt;
+      EXPECT_NEAR(h.y(), std::sin(yaw), 1e-12) << yaw << " " << tilt;
+      const Eigen::Vector2d local = ToRobotFrame(h, 1.5, -0.5);
+      const Eigen::Vector2d by_yaw = ToRobotFrame(Pose{Vec3::Zero(), q}.Yaw(), 1.5, -0.5);
+      EXPECT_NEAR(local.x(), by_yaw.x(), 1e-12);
+      EXPECT_NEAR(local.y(), by_yaw.y(), 1e-12);
+    }
+  }
+  const Eigen::Vector2d up = HeadingOf(Quat(Eigen::AngleAxisd(-M_PI / 2, Vec3::UnitY())));
+  EXPECT_EQ(up, Eigen::Vector2d(1.0, 0.0));
+  const auto command = CommandedVelocity(GlobalVelocityCommand{0.0, 2.0, 1.0}, HeadingOf(Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()))));
+  EXPECT_NEAR(command.linear.x(), 2.0, 1e-12);  // +y is straight ahead of a robot facing +y
+  EXPECT_NEAR(command.linear.y(), 0.0, 1e-12);
+  EXPECT_EQ(command.angular, 1.0);
+}
+
 }  // namespace
 }  // namespace ubersim::kernel
