@@ -968,7 +968,8 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double
     int mode = dContactApprox1;
     c.surface.mu = surface.mu;
     if (directional) {
-      const Quat q = directional->body() ? directional->body()->GetPose().orientation : Quat::Identity();
+      // The body's orientation alone: its pose would copy the position too, once per wheel contact.
+      const Quat q = directional->body() ? ToQuat(dBodyGetQuaternion(directional->body()->id())) : Quat::Identity();
       Vec3 dir = q * *directional->friction_axis();
       dir -= normal * normal.dot(dir);  // project onto the contact plane
       if (dir.norm() > 1e-6) {

@@ -17,8 +17,6 @@ void SetOdeRotation(dBodyID body, const Quat& q) {
   dBodySetQuaternion(body, odeq);
 }
 
-Quat ToQuat(const dReal* q) { return Quat(q[0], q[1], q[2], q[3]); }
-
 bool AllFinite(const Vec3& v) { return v.allFinite(); }
 
 void RequireFinite(const Vec3& v, const char* what) {

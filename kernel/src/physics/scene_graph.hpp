@@ -272,5 +272,7 @@ class SceneGraph {
 
 /// Converts between Eigen and ODE representations.
 inline Vec3 ToVec3(const dReal* v) { return Vec3(v[0], v[1], v[2]); }
+/// An ODE quaternion (w, x, y, z) as Eigen's.
+inline Quat ToQuat(const dReal* q) { return Quat(q[0], q[1], q[2], q[3]); }
 
 }  // namespace ubersim::kernel

@@ -198,13 +198,15 @@ class OmniDrive final : public ubersim::Drive {
   }
 
   void PreStep(const ubersim::StepInfo& step) override {
-    SetWheelMotors(step);
-    for (Wheel& w : wheels_) w.driven->Step(step.dt);
+    // The chassis as the step starts: the servo's heading and every wheel's motor read this pose.
+    const ubersim::Pose pose = ctx_->Chassis().GetPose();
+    SetWheelMotors(step, pose);
+    for (Wheel& w : wheels_) w.driven->Step(step.dt, pose);
   }
 
  private:
   // This step's wheel motors: the direct wheel speeds of a fresh command, else the servo loop's.
-  void SetWheelMotors(const ubersim::StepInfo& step) {
+  void SetWheelMotors(const ubersim::StepInfo& step, const ubersim::Pose& pose) {
     const bool fresh = watchdog_.Fresh(ctx_->SimTime());
     if (fresh) {
       if (const auto* w = std::get_if<ubersim::WheelSpeedCommand>(&command_)) {
@@ -219,7 +221,8 @@ class OmniDrive final : public ubersim::Drive {
         return;
       }
     }
-    const ubersim::PlanarVelocity& set = servo_.Step(fresh ? TargetLocal() : ubersim::PlanarVelocity{}, step.dt);
+    const ubersim::PlanarVelocity& set =
+        servo_.Step(fresh ? TargetLocal(ubersim::HeadingOf(pose.orientation)) : ubersim::PlanarVelocity{}, step.dt);
     // The firmware's gyro holds the heading the setpoint integrates to.
     const double spin = gyro_.Correct(set.angular, ctx_->Chassis().GetTwist().angular.z(), step.dt);
     // In the frame the robot turns to within the step: driving while turning, it keeps its course.
@@ -234,9 +237,10 @@ class OmniDrive final : public ubersim::Drive {
     }
   }
 
-  // The command as (forward, left, angular) in the robot frame, within the speed limits.
-  ubersim::PlanarVelocity TargetLocal() const {
-    return servo_.ClampToLimits(ubersim::CommandedVelocity(command_, ctx_->Chassis()));
+  // The command as (forward, left, angular) in the frame of a robot heading along `heading`
+  // (unit), within the speed limits.
+  ubersim::PlanarVelocity TargetLocal(const Eigen::Vector2d& heading) const {
+    return servo_.ClampToLimits(ubersim::CommandedVelocity(command_, heading));
   }
 
   ubersim::RobotContext* ctx_ = nullptr;

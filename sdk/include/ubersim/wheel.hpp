@@ -160,9 +160,12 @@ class ContactWheel {
   /// included. Saturated, the wheel spins up by what is left of the motor's torque after the
   /// carpet's pull on a slipping rim (kinetic friction at the static load, along the rolling
   /// direction). The chassis takes the reaction of the wheel's change of spin.
-  void Step(double dt) {
+  void Step(double dt) { Step(dt, chassis_->GetPose()); }
+  /// Step(dt) with the chassis' pose as the step starts (`chassis_pose`): a drive stepping all
+  /// its wheels reads the pose once.
+  void Step(double dt, const Pose& chassis_pose) {
     dt_ = dt;
-    const Pose pose = chassis_->GetPose();
+    const Pose& pose = chassis_pose;
     const double wanted = spin_inertia_ * (target_ - rate_) / dt;
     double torque = std::clamp(wanted, -max_torque_, max_torque_);
     if (torque != wanted && touched_) {
@@ -304,6 +307,10 @@ class DrivenWheel {
   /// Steps a contact wheel's motor (a body's is ODE's): call once a step in PreStep, after SetMotor.
   void Step(double dt) {
     if (contact_) contact_->Step(dt);
+  }
+  /// Step(dt) with the chassis' pose as the step starts, read once for all of a robot's wheels.
+  void Step(double dt, const Pose& chassis_pose) {
+    if (contact_) contact_->Step(dt, chassis_pose);
   }
   /// Spins the wheel at `rate` at once, rolling with the chassis: a robot put down moving.
   void Roll(double rate) {
