@@ -838,7 +838,10 @@ void CollisionManager::SweepBallAt(GeomImpl& ball, GeomImpl& other, const Vec3& 
   AddContacts(ball, other, 1);
 }
 
-void CollisionManager::ClearContacts() { dJointGroupEmpty(contacts_.get()); }
+void CollisionManager::ClearContacts() {
+  dJointGroupEmpty(contacts_.get());
+  static_contacts_.Clear();
+}
 
 int CollisionManager::FindContacts(GeomImpl& a, GeomImpl& b) {
   if (SphereAndPlane(a, b)) return CollideSphereAndPlane(a.id(), b.id(), scratch_[0]);
@@ -1067,7 +1070,11 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double
     }
     c.surface.mode = mode;
     dJointID j = dJointCreateContact(world, contacts_.get(), &c);
-    dJointAttach(j, a.body() ? a.body()->id() : nullptr, b.body() ? b.body()->id() : nullptr);
+    dBodyID body_a = a.body() ? a.body()->id() : nullptr;
+    dBodyID body_b = b.body() ? b.body()->id() : nullptr;
+    dJointAttach(j, body_a, body_b);
+    // A body touching only the static world is solved by the kernel (IslandStepper), from this copy.
+    if (!body_a != !body_b) static_contacts_.Record(j, c, !body_a);
     ++stats_.contacts;
   }
 }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ubersim/scene.hpp"
+#include "physics/contact_island.hpp"
 #include "physics/ode_handles.hpp"
 #include "physics/scene_graph.hpp"
 
@@ -249,6 +250,7 @@ class CollisionManager {
   CollisionStats stats_;
   OdeSpace space_;        // only for the ODE broadphases
   OdeJointGroup contacts_;
+  StaticContactLog static_contacts_;  // the contacts with the static world, for the kernel's solver
   std::vector<dContactGeom> scratch_;
   double swept_ball_step_ = 0.0;
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> ball_touching_;  // this step's ball pairs

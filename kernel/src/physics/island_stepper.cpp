@@ -153,37 +153,55 @@ void IslandStepper::Step(dWorldID world, const std::vector<dBodyID>& bodies, con
 void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int pass, int iterations,
                          double dt) {
   paused_.clear();
-  lone_.clear();
+  own_.clear();
   held_.clear();
-  std::size_t solved = 0;  // enabled bodies of this pass linked by a joint: QuickStep's work
+  std::size_t solved = 0;    // enabled bodies of this pass linked by a joint: QuickStep's work
+  std::size_t on_field = 0;  // of those, static-contact islands (own_ takes them)
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     dBodyID b = bodies[i];
     if (!dBodyIsEnabled(b)) continue;
     if (!InPass(i, pass)) {
       paused_.push_back(b);
     } else if (IsLoneBody(b)) {
-      lone_.push_back(b);
+      own_.push_back({b, false});
+    } else if (IsStaticContactIsland(b)) {
+      own_.push_back({b, true});
+      ++on_field;
     } else {
       ++solved;
       if (IsLimb(i)) held_.push_back(b);  // a limb has a joint: never lone
     }
   }
-  if (move_order_matters_ && solved > 0 && !lone_.empty()) {
-    // QuickStep would have moved the lone bodies between its other islands: the broadphase
+  if (on_field > 0 && solved > 0 && iterations >= ContactIslandStepper::kFirstShuffle) {
+    // QuickStep shuffles an island's rows with ODE's generator from its ninth sweep on, island
+    // after island in its own order: the kernel's islands drawing before or after all of its
+    // islands would change every draw. Such a pass leaves them to QuickStep.
+    own_.erase(std::remove_if(own_.begin(), own_.end(), [](const OwnIsland& o) { return o.contacts; }), own_.end());
+    solved += on_field;
+    on_field = 0;
+  }
+  if (move_order_matters_ && solved > 0 && !own_.empty()) {
+    // QuickStep would have moved the kernel's bodies between its other islands: the broadphase
     // lists the geometries in the order they first moved, and that order decides which contact
     // comes first. Touching every body of the pass in QuickStep's order first keeps those lists
     // as they were; the moves that follow do not reorder what is listed already. The touch
     // costs about a tenth of what a lone body saves: for a ball in flight among a hundred wheel
-    // bodies, QuickStep keeps it (the same numbers either way).
-    if (lone_.size() * 10 < solved) {
-      lone_.clear();
+    // bodies, QuickStep keeps it (the same numbers either way). A static-contact island saves
+    // far more than the touch costs.
+    if (on_field == 0 && own_.size() * 10 < solved) {
+      own_.clear();
     } else {
       TouchInQuickStepOrder(bodies, pass);
     }
   }
-  for (dBodyID b : lone_) {
-    lone_stepper_.Step(b, gravity_, dt);
-    paused_.push_back(b);  // stepped: QuickStep must not step it again
+  if (on_field > 0) settings_ = ContactSolverSettings::Of(world);
+  for (const OwnIsland& o : own_) {
+    if (o.contacts) {
+      contact_stepper_.Step(o.body, gravity_, settings_, iterations, dt);
+    } else {
+      lone_stepper_.Step(o.body, gravity_, dt);
+    }
+    paused_.push_back(o.body);  // stepped: QuickStep must not step it again
   }
   if (solved == 0) return;
   for (dBodyID b : paused_) dBodyDisable(b);

@@ -8,6 +8,7 @@
 
 #include <ode/ode.h>
 
+#include "physics/contact_island.hpp"
 #include "physics/lone_body.hpp"
 
 namespace ubersim::kernel {
@@ -33,7 +34,9 @@ struct IterationDemand {
 /// one QuickStep.
 ///
 /// A body no joint touches (IsLoneBody: a one-body robot driving free, a ball in flight) is
-/// stepped by LoneBodyStepper, bit for bit as QuickStep would, and sits QuickStep out; a pass
+/// stepped by LoneBodyStepper, and a body touching only the static world
+/// (IsStaticContactIsland: a wheel robot on its wheels' contacts, the ball on the carpet) by
+/// ContactIslandStepper, each bit for bit as QuickStep would; they sit QuickStep out, and a pass
 /// left with nothing else calls no QuickStep at all.
 class IslandStepper {
  public:
@@ -91,13 +94,19 @@ class IslandStepper {
   bool split_ = false;                 // this step has more than one pass
   dVector3 gravity_ = {};              // the world's, read once a step
   LoneBodyStepper lone_stepper_;
+  ContactIslandStepper contact_stepper_;
+  ContactSolverSettings settings_;     // the world's, read in a pass with static-contact islands
+  struct OwnIsland {
+    dBodyID body;
+    bool contacts;  // a static-contact island; else a lone body
+  };
   std::vector<dBodyID> ball_islands_;  // scratch, reused each step
   std::vector<int> group_;             // per body of Step's list: its pass
   std::vector<int> pass_iterations_;   // per pass: its QuickStep iterations
   std::vector<std::pair<dBodyID, int>> marked_;   // GroupByDemand's bodies reached, with their pass
   std::vector<IterationDemand> seeds_;  // GroupByDemand's balls and demands, highest count first
   std::vector<dBodyID> paused_;        // bodies disabled for one pass, to enable again
-  std::vector<dBodyID> lone_;          // this pass's lone bodies, in Step's order
+  std::vector<OwnIsland> own_;         // this pass's islands the kernel steps, in Step's order
   std::vector<dBodyID> walk_;          // TouchInQuickStepOrder's stack
   std::vector<dBodyID> reached_;       // and the bodies its walk has reached
   std::vector<dBodyID> held_;          // limbs disabled for QuickStep's search to reach them

@@ -5,17 +5,22 @@
 
 namespace ubersim::kernel {
 
-bool IsLoneBody(dBodyID body) {
-  // dBodyGetJoint(body, 0) is one pointer read; dBodyGetNumJoints walks the whole list.
-  return dBodyIsEnabled(body) && dBodyGetJoint(body, 0) == nullptr && !dBodyIsKinematic(body) &&
-         !dBodyGetFiniteRotationMode(body) && dBodyGetLinearDamping(body) == 0 &&
-         dBodyGetAngularDamping(body) == 0 && dBodyGetMaxAngularSpeed(body) == dInfinity;
+bool StepsAsQuickStepsAFreeBody(dBodyID body) {
+  return dBodyIsEnabled(body) && !dBodyIsKinematic(body) && !dBodyGetFiniteRotationMode(body) &&
+         dBodyGetLinearDamping(body) == 0 && dBodyGetAngularDamping(body) == 0 &&
+         dBodyGetMaxAngularSpeed(body) == dInfinity;
 }
 
-const dReal* LoneBodyStepper::BodyInverseInertia(dBodyID body, const dMass& mass) {
+bool IsLoneBody(dBodyID body) {
+  // dBodyGetJoint(body, 0) is one pointer read; dBodyGetNumJoints walks the whole list.
+  return dBodyGetJoint(body, 0) == nullptr && StepsAsQuickStepsAFreeBody(body);
+}
+
+const dReal* InverseInertiaCache::Of(dBodyID body, const dMass& mass) {
+  if (entries_.size() > 4096) entries_.clear();  // bodies come and go: bound it
   // Cached per body and checked against the inertia it came from: a pure function of it, so a
   // body ID ODE reuses for a new body finds either the right inverse or a stale one it replaces.
-  InverseInertia& cached = inverse_inertia_[body];
+  Entry& cached = entries_[body];
   if (std::memcmp(cached.inertia, mass.I, sizeof mass.I) != 0 || cached.inverse[0] == 0) {
     std::memcpy(cached.inertia, mass.I, sizeof mass.I);
     // What dBodySetMass stored: the Cholesky inverse, or the identity for an inertia that is
@@ -27,63 +32,33 @@ const dReal* LoneBodyStepper::BodyInverseInertia(dBodyID body, const dMass& mass
 
 // The order of every operation below is QuickStep's (quickstep.cpp, stages 0 and 6, and
 // dxStepBody in util.cpp), with ODE's own inline helpers: any other order changes the last bits.
-void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
-  if (inverse_inertia_.size() > 4096) inverse_inertia_.clear();  // bodies come and go: bound it
-  dMass mass;
-  dBodyGetMass(body, &mass);
-  const dReal* rotation = dBodyGetRotation(body);
-
-  dVector3 force, torque;
-  std::memcpy(force, dBodyGetForce(body), sizeof force);
-  std::memcpy(torque, dBodyGetTorque(body), sizeof torque);
-  if (dBodyGetGravityMode(body)) {
-    // Only the non-zero components: adding m·0 would turn a -0 force into +0.
-    for (int k = 0; k < 3; ++k) {
-      if (gravity[k] != 0) force[k] += mass.mass * gravity[k];
-    }
-  }
-
-  // The inverse inertia in the world frame.
+void AddImplicitGyroscopicTorque(const dMass& mass, const dReal* rotation, const dReal* angular, dReal dt,
+                                 dReal* torque) {
   dMatrix3 tmp = {};
-  dMatrix3 inverse_inertia = {};
-  dMultiply2_333(tmp, BodyInverseInertia(body, mass), rotation);
-  dMultiply0_333(inverse_inertia, rotation, tmp);
-
-  dVector3 angular;
-  std::memcpy(angular, dBodyGetAngularVel(body), sizeof angular);
-  const dReal inverse_mass = dRecip(mass.mass);
-  // Turning only about a vertical principal axis (a one-body robot driving level: most steps of
-  // most robots), the momentum lies along the turn and the gyroscopic torque is zero: its work
-  // is skipped. QuickStep's implicit form computes it as zero but for the last bit of the turn
-  // rate, so here the stepper agrees with QuickStep to rounding, not to the bit.
-  const bool about_principal_vertical = angular[0] == 0 && angular[1] == 0 && rotation[8] == 0 &&
-                                        rotation[9] == 0 && mass.I[2] == 0 && mass.I[6] == 0;
-  if (dBodyGetGyroscopicMode(body) && inverse_mass > 0 && !about_principal_vertical) {
-    // The implicit gyroscopic torque (Lacoursière 2006), as QuickStep computes it.
-    dMatrix3 inertia = {};
-    dMultiply2_333(tmp, mass.I, rotation);
-    dMultiply0_333(inertia, rotation, tmp);
-    dVector3 momentum;
-    dMultiply0_331(momentum, inertia, angular);
-    dMatrix3 tilde = {};
-    dSetCrossMatrixMinus(tilde, momentum, 4);
-    for (int i = 0; i < 12; ++i) tilde[i] = tilde[i] * dt + inertia[i];
-    dScaleVector3(momentum, dRecip(dt));
-    dMatrix3 tilde_inverse = {};
-    if (dInvertMatrix3(tilde_inverse, tilde) != 0) {
-      dMultiply0_333(tilde, inertia, tilde_inverse);
-      tilde[0] -= 1;
-      tilde[5] -= 1;
-      tilde[10] -= 1;
-      dVector3 gyroscopic;
-      dMultiply0_331(gyroscopic, tilde, momentum);
-      dAddVectors3(torque, torque, gyroscopic);
-    }
+  dMatrix3 inertia = {};
+  dMultiply2_333(tmp, mass.I, rotation);
+  dMultiply0_333(inertia, rotation, tmp);
+  dVector3 momentum;
+  dMultiply0_331(momentum, inertia, angular);
+  dMatrix3 tilde = {};
+  dSetCrossMatrixMinus(tilde, momentum, 4);
+  for (int i = 0; i < 12; ++i) tilde[i] = tilde[i] * dt + inertia[i];
+  dScaleVector3(momentum, dRecip(dt));
+  dMatrix3 tilde_inverse = {};
+  if (dInvertMatrix3(tilde_inverse, tilde) != 0) {
+    dMultiply0_333(tilde, inertia, tilde_inverse);
+    tilde[0] -= 1;
+    tilde[5] -= 1;
+    tilde[10] -= 1;
+    dVector3 gyroscopic;
+    dMultiply0_331(gyroscopic, tilde, momentum);
+    dAddVectors3(torque, torque, gyroscopic);
   }
+}
 
+void FinishBodyStep(dBodyID body, dReal inverse_mass, const dReal* inverse_inertia, const dReal* force,
+                    dReal* torque, dReal* linear, dReal* angular, dReal dt) {
   // Velocities.
-  dVector3 linear;
-  std::memcpy(linear, dBodyGetLinearVel(body), sizeof linear);
   const dReal impulse_per_force = dt * inverse_mass;
   for (int k = 0; k < 3; ++k) {
     linear[k] += impulse_per_force * force[k];
@@ -108,6 +83,45 @@ void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
   dBodySetQuaternion(body, q);
   dBodySetForce(body, 0, 0, 0);
   dBodySetTorque(body, 0, 0, 0);
+}
+
+void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
+  dMass mass;
+  dBodyGetMass(body, &mass);
+  const dReal* rotation = dBodyGetRotation(body);
+
+  dVector3 force, torque;
+  std::memcpy(force, dBodyGetForce(body), sizeof force);
+  std::memcpy(torque, dBodyGetTorque(body), sizeof torque);
+  if (dBodyGetGravityMode(body)) {
+    // Only the non-zero components: adding m·0 would turn a -0 force into +0.
+    for (int k = 0; k < 3; ++k) {
+      if (gravity[k] != 0) force[k] += mass.mass * gravity[k];
+    }
+  }
+
+  // The inverse inertia in the world frame.
+  dMatrix3 tmp = {};
+  dMatrix3 inverse_inertia = {};
+  dMultiply2_333(tmp, inverse_inertia_.Of(body, mass), rotation);
+  dMultiply0_333(inverse_inertia, rotation, tmp);
+
+  dVector3 angular;
+  std::memcpy(angular, dBodyGetAngularVel(body), sizeof angular);
+  const dReal inverse_mass = dRecip(mass.mass);
+  // Turning only about a vertical principal axis (a one-body robot driving level: most steps of
+  // most robots), the momentum lies along the turn and the gyroscopic torque is zero: its work
+  // is skipped. QuickStep's implicit form computes it as zero but for the last bit of the turn
+  // rate, so here the stepper agrees with QuickStep to rounding, not to the bit.
+  const bool about_principal_vertical = angular[0] == 0 && angular[1] == 0 && rotation[8] == 0 &&
+                                        rotation[9] == 0 && mass.I[2] == 0 && mass.I[6] == 0;
+  if (dBodyGetGyroscopicMode(body) && inverse_mass > 0 && !about_principal_vertical) {
+    AddImplicitGyroscopicTorque(mass, rotation, angular, dt, torque);
+  }
+
+  dVector3 linear;
+  std::memcpy(linear, dBodyGetLinearVel(body), sizeof linear);
+  FinishBodyStep(body, inverse_mass, inverse_inertia, force, torque, linear, angular, dt);
 }
 
 }  // namespace ubersim::kernel

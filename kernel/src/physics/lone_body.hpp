@@ -15,6 +15,36 @@ namespace ubersim::kernel {
 /// be asked about.
 bool IsLoneBody(dBodyID body);
 
+/// Whether `body` is enabled, dynamic and asks for none of the options the kernel's steppers
+/// leave to ODE (finite rotation, damping, a cap on the angular speed); its joints aside.
+bool StepsAsQuickStepsAFreeBody(dBodyID body);
+
+/// The body-frame inverse inertia ODE derived in dBodySetMass, per body, cached.
+class InverseInertiaCache {
+ public:
+  /// The inverse of `mass.I` as dBodySetMass stored it for `body` (a 3×4 ODE matrix).
+  const dReal* Of(dBodyID body, const dMass& mass);
+
+ private:
+  struct Entry {
+    dMatrix3 inertia;
+    dMatrix3 inverse;
+  };
+  std::unordered_map<dBodyID, Entry> entries_;
+};
+
+/// QuickStep's implicit gyroscopic torque (Lacoursière 2006) of a body of `mass` turned by
+/// `rotation` and turning at `angular`, added to `torque`, floating-point operation for operation.
+void AddImplicitGyroscopicTorque(const dMass& mass, const dReal* rotation, const dReal* angular, dReal dt,
+                                 dReal* torque);
+
+/// The end of QuickStep's step of one body: `linear` and `angular` (its velocities so far) take
+/// `force` and `torque` over `dt` (torque through `inverse_inertia`, world frame), become the
+/// body's velocities, the pose follows, the geometries are told it moved, and the accumulators
+/// are cleared. `torque` is scaled by dt in place, as QuickStep does.
+void FinishBodyStep(dBodyID body, dReal inverse_mass, const dReal* inverse_inertia, const dReal* force,
+                    dReal* torque, dReal* linear, dReal* angular, dReal dt);
+
 /// Steps lone bodies (IsLoneBody) the way ODE 0.16's QuickStep steps a one-body island without
 /// constraints, floating-point operation for floating-point operation: gravity, the implicit
 /// gyroscopic torque, the velocity update, the position and quaternion update, the geometries
@@ -27,14 +57,7 @@ class LoneBodyStepper {
   void Step(dBodyID body, const dReal* gravity, dReal dt);
 
  private:
-  // The body-frame inverse inertia ODE derived in dBodySetMass, with the inertia it came from.
-  struct InverseInertia {
-    dMatrix3 inertia;
-    dMatrix3 inverse;
-  };
-  const dReal* BodyInverseInertia(dBodyID body, const dMass& mass);
-
-  std::unordered_map<dBodyID, InverseInertia> inverse_inertia_;
+  InverseInertiaCache inverse_inertia_;
 };
 
 }  // namespace ubersim::kernel

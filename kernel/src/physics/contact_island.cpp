@@ -1,0 +1,302 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "physics/contact_island.hpp"
+
+#include <cstring>
+#include <utility>
+
+namespace ubersim::kernel {
+
+void StaticContactLog::Record(dJointID joint, const dContact& contact, bool reversed) {
+  contacts_.push_back(StaticContact{contact, reversed});
+  dJointSetData(joint, &contacts_.back());
+}
+
+const StaticContact* StaticContactLog::Of(dJointID joint) {
+  if (dJointGetType(joint) != dJointTypeContact) return nullptr;
+  return static_cast<const StaticContact*>(dJointGetData(joint));
+}
+
+ContactSolverSettings ContactSolverSettings::Of(dWorldID world) {
+  ContactSolverSettings s;
+  s.erp = dWorldGetERP(world);
+  s.cfm = dWorldGetCFM(world);
+  s.surface_layer = dWorldGetContactSurfaceLayer(world);
+  s.max_correcting_velocity = dWorldGetContactMaxCorrectingVel(world);
+  s.sor_w = dWorldGetQuickStepW(world);
+  return s;
+}
+
+bool IsStaticContactIsland(dBodyID body) {
+  dJointID first = dBodyGetJoint(body, 0);
+  if (!first || !StepsAsQuickStepsAFreeBody(body)) return false;
+  for (int k = 0;; ++k) {
+    dJointID j = k == 0 ? first : dBodyGetJoint(body, k);
+    if (!j) return true;
+    // The log keeps only contacts between a body and the static world.
+    if (!dJointIsEnabled(j) || !StaticContactLog::Of(j)) return false;
+  }
+}
+
+// Everything below follows ODE 0.16's order of operations (joints/contact.cpp, quickstep.cpp)
+// with ODE's own inline helpers: any other order changes the last bits.
+void ContactIslandStepper::AddContactRows(StaticContact sc, const dReal* position, const dReal* linear,
+                                          const dReal* angular, const ContactSolverSettings& settings, dReal fps) {
+  dContact& c = sc.contact;
+  dSurfaceParameters& s = c.surface;
+  const int mode = s.mode;
+
+  // getInfo1: the row count, the friction coefficients made non-negative.
+  int m = 1;
+  if (mode & dContactAxisDep) {
+    if (s.mu < 0) {
+      s.mu = 0;
+    } else if (s.mu > 0) {
+      ++m;
+    }
+    if (s.mu2 < 0) {
+      s.mu2 = 0;
+    } else if (s.mu2 > 0) {
+      ++m;
+    }
+    if (mode & dContactRolling) {
+      for (dReal* rho : {&s.rho, &s.rho2, &s.rhoN}) {
+        if (*rho < 0) {
+          *rho = 0;
+        } else {
+          ++m;
+        }
+      }
+    }
+  } else {
+    if (s.mu < 0) {
+      s.mu = 0;
+    } else if (s.mu > 0) {
+      m += 2;
+    }
+    if (mode & dContactRolling) {
+      if (s.rho < 0) {
+        s.rho = 0;
+      } else {
+        m += 3;
+      }
+    }
+  }
+
+  // QuickStep's blank rows, then getInfo2 for a joint whose second body is the static world.
+  const std::size_t first = rows_.size();
+  Row blank{};
+  blank.cfm = settings.cfm;
+  blank.lo = -dInfinity;
+  blank.hi = dInfinity;
+  blank.findex = -1;
+  rows_.resize(first + static_cast<std::size_t>(m), blank);
+  Row* row = &rows_[first];
+
+  const dReal erp = (mode & dContactSoftERP) ? s.soft_erp : settings.erp;
+  const dReal k = fps * erp;
+  dReal depth = c.geom.depth - settings.surface_layer;
+  if (depth < 0) depth = 0;
+  const dReal motion_n = (mode & dContactMotionN) ? s.motionN : REAL(0.0);
+  const dReal pushout = k * depth + motion_n;
+  const bool apply_bounce = (mode & dContactBounce) && s.bounce_vel >= 0;
+  dReal outgoing = 0;
+  const dReal max_vel = settings.max_correcting_velocity;
+  dReal rhs = pushout > max_vel ? max_vel : pushout;
+
+  dVector3 normal;
+  if (sc.reversed) {
+    dCopyNegatedVector3(normal, c.geom.normal);
+  } else {
+    dCopyVector3(normal, c.geom.normal);
+  }
+  dVector3 c1;
+  dSubtractVectors3(c1, c.geom.pos, position);
+  dCopyVector3(row[0].j, normal);
+  dCalcVectorCross3(row[0].j + 3, c1, normal);
+  if (apply_bounce) {
+    outgoing += dCalcVectorDot3(row[0].j + 3, angular) + dCalcVectorDot3(normal, linear);
+    const dReal negated_outgoing = motion_n - outgoing;
+    if (negated_outgoing > s.bounce_vel) {
+      const dReal bounced = s.bounce * negated_outgoing + motion_n;
+      if (bounced > rhs) rhs = bounced;
+    }
+  }
+  row[0].rhs = rhs;
+  if (mode & dContactSoftCFM) row[0].cfm = s.soft_cfm;
+  row[0].lo = 0;
+  row[0].hi = dInfinity;
+
+  if (m > 1) {
+    dVector3 t1, t2;
+    if (mode & dContactFDir1) {
+      dCopyVector3(t1, c.fdir1);
+      dCalcVectorCross3(t2, normal, t1);
+    } else {
+      dPlaneSpace(normal, t1, t2);
+    }
+    int r = 1;
+    const dReal mu = s.mu;
+    if (mu > 0) {
+      dCopyVector3(row[r].j, t1);
+      dCalcVectorCross3(row[r].j + 3, c1, t1);
+      if (mode & dContactMotion1) row[r].rhs = s.motion1;
+      if (mode & dContactSlip1) row[r].cfm = s.slip1;
+      row[r].lo = -mu;
+      row[r].hi = mu;
+      if (mode & dContactApprox1_1) row[r].findex = 0;
+      ++r;
+    }
+    const dReal mu2 = (mode & dContactMu2) ? s.mu2 : mu;
+    if (mu2 > 0) {
+      dCopyVector3(row[r].j, t2);
+      dCalcVectorCross3(row[r].j + 3, c1, t2);
+      if (mode & dContactMotion2) row[r].rhs = s.motion2;
+      if (mode & dContactSlip2) row[r].cfm = s.slip2;
+      row[r].lo = -mu2;
+      row[r].hi = mu2;
+      if (mode & dContactApprox1_2) row[r].findex = 0;
+      ++r;
+    }
+    if (mode & dContactRolling) {
+      const dReal* axes[3] = {t1, t2, normal};
+      const int approx[3] = {dContactApprox1_1, dContactApprox1_2, dContactApprox1_N};
+      const bool axis_dep = (mode & dContactAxisDep) != 0;
+      const dReal rho[3] = {s.rho, axis_dep ? s.rho2 : s.rho, axis_dep ? s.rhoN : s.rho};
+      for (int i = 0; i < 3; ++i) {
+        if (rho[i] > 0) {
+          dCopyVector3(row[r].j + 3, axes[i]);
+          row[r].lo = -rho[i];
+          row[r].hi = rho[i];
+          if (mode & approx[i]) row[r].findex = 0;
+          ++r;
+        }
+      }
+    }
+  }
+
+  for (int i = 0; i < m; ++i) {
+    if (row[i].findex != -1) row[i].findex += static_cast<int>(first);
+    row[i].rhs *= fps;
+    row[i].cfm *= fps;
+  }
+}
+
+void ContactIslandStepper::Step(dBodyID body, const dReal* gravity, const ContactSolverSettings& settings,
+                                int iterations, dReal dt) {
+  dMass mass;
+  dBodyGetMass(body, &mass);
+  const dReal* rotation = dBodyGetRotation(body);
+
+  // Stage 0: gravity, the world-frame inverse inertia, the gyroscopic torque.
+  dVector3 force, torque;
+  std::memcpy(force, dBodyGetForce(body), sizeof force);
+  std::memcpy(torque, dBodyGetTorque(body), sizeof torque);
+  if (dBodyGetGravityMode(body)) {
+    for (int k = 0; k < 3; ++k) {
+      if (gravity[k] != 0) force[k] += mass.mass * gravity[k];
+    }
+  }
+  dMatrix3 tmp = {};
+  dMatrix3 inverse_inertia = {};
+  dMultiply2_333(tmp, inverse_inertia_.Of(body, mass), rotation);
+  dMultiply0_333(inverse_inertia, rotation, tmp);
+  dVector3 linear, angular;
+  std::memcpy(linear, dBodyGetLinearVel(body), sizeof linear);
+  std::memcpy(angular, dBodyGetAngularVel(body), sizeof angular);
+  const dReal inverse_mass = dRecip(mass.mass);
+  if (dBodyGetGyroscopicMode(body) && inverse_mass > 0) {
+    AddImplicitGyroscopicTorque(mass, rotation, angular, dt, torque);
+  }
+
+  // Stage 2: the rows, joint by joint in the body's list (QuickStep's island order), and the
+  // right-hand side c/h - J·(v/h + M⁻¹·f).
+  const dReal fps = dRecip(dt);
+  rows_.clear();
+  const dReal* position = dBodyGetPosition(body);
+  for (int k = 0;; ++k) {
+    dJointID j = dBodyGetJoint(body, k);
+    if (!j) break;
+    AddContactRows(*StaticContactLog::Of(j), position, linear, angular, settings, fps);
+  }
+  dReal rhs_tmp[6];
+  for (int k = 0; k < 3; ++k) rhs_tmp[k] = -(force[k] * inverse_mass + linear[k] * fps);
+  dMultiply0_331(rhs_tmp + 3, inverse_inertia, torque);
+  for (int k = 0; k < 3; ++k) rhs_tmp[3 + k] = -(angular[k] * fps) - rhs_tmp[3 + k];
+  for (Row& r : rows_) {
+    dReal sum = 0;
+    for (int k = 0; k < 6; ++k) sum += r.j[k] * rhs_tmp[k];
+    r.rhs += sum;
+  }
+
+  // Stage 4: M⁻¹·Jᵀ, each row scaled by its relaxed diagonal, unbounded rows first.
+  const int m = static_cast<int>(rows_.size());
+  order_.clear();
+  for (Row& r : rows_) {
+    for (int k = 0; k < 3; ++k) r.imj[k] = inverse_mass * r.j[k];
+    dMultiply0_331(r.imj + 3, inverse_inertia, r.j + 3);
+  }
+  for (Row& r : rows_) {
+    dReal sum = 0;
+    for (int k = 0; k < 6; ++k) sum += r.imj[k] * r.j[k];
+    const dReal ad = settings.sor_w / (sum + r.cfm);
+    r.cfm = r.cfm * ad;
+    r.rhs *= ad;
+    for (dReal& v : r.j) v *= ad;
+  }
+  for (int i = 0; i < m; ++i) {
+    if (rows_[static_cast<std::size_t>(i)].findex == -1) order_.push_back(i);
+  }
+  for (int i = 0; i < m; ++i) {
+    if (rows_[static_cast<std::size_t>(i)].findex != -1) order_.push_back(i);
+  }
+  lambda_.assign(static_cast<std::size_t>(m), 0);
+  dReal fc[6] = {0, 0, 0, 0, 0, 0};
+
+  // The SOR sweeps. QuickStep shuffles the order before every eighth sweep after the first
+  // eight, with ODE's generator.
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    if (iteration >= kFirstShuffle && iteration % kFirstShuffle == 0) {
+      for (int index = 1; index < m; ++index) {
+        const int swap = dRandInt(index + 1);
+        std::swap(order_[static_cast<std::size_t>(index)], order_[static_cast<std::size_t>(swap)]);
+      }
+    }
+    for (const int index : order_) {
+      const Row& r = rows_[static_cast<std::size_t>(index)];
+      dReal& lambda = lambda_[static_cast<std::size_t>(index)];
+      const dReal old_lambda = lambda;
+      dReal delta = r.rhs - old_lambda * r.cfm;
+      delta -= fc[0] * r.j[0] + fc[1] * r.j[1] + fc[2] * r.j[2] + fc[3] * r.j[3] + fc[4] * r.j[4] + fc[5] * r.j[5];
+      dReal hi, lo;
+      if (r.findex != -1) {
+        hi = dFabs(r.hi * lambda_[static_cast<std::size_t>(r.findex)]);
+        lo = -hi;
+      } else {
+        hi = r.hi;
+        lo = r.lo;
+      }
+      const dReal new_lambda = old_lambda + delta;
+      if (new_lambda < lo) {
+        delta = lo - old_lambda;
+        lambda = lo;
+      } else if (new_lambda > hi) {
+        delta = hi - old_lambda;
+        lambda = hi;
+      } else {
+        lambda = new_lambda;
+      }
+      if (delta != 0) {
+        for (int k = 0; k < 6; ++k) fc[k] += delta * r.imj[k];
+      }
+    }
+  }
+
+  // Stage 4b: the constraint forces' velocity change; then the body's step as a free body's.
+  for (int k = 0; k < 3; ++k) {
+    linear[k] += dt * fc[k];
+    angular[k] += dt * fc[3 + k];
+  }
+  FinishBodyStep(body, inverse_mass, inverse_inertia, force, torque, linear, angular, dt);
+}
+
+}  // namespace ubersim::kernel
