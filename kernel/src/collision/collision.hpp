@@ -145,6 +145,8 @@ class CollisionManager {
   const std::vector<dBodyID>& RobotsInContact() const { return robots_in_contact_; }
   /// Removes the contact joints of the last step.
   void ClearContacts();
+  /// The contacts of this step between a body and the static world, as given to ODE.
+  const StaticContactLog& StaticContacts() const { return static_contacts_; }
   /// Files every geometry anew (SetBroadphase: in creation order) and drops every cache that may
   /// name one: whenever robots come or go. A world built anew from the same robots in the same
   /// order (a snapshot's) then pairs as the original does.

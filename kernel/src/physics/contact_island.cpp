@@ -6,16 +6,6 @@
 
 namespace ubersim::kernel {
 
-void StaticContactLog::Record(dJointID joint, const dContact& contact, bool reversed) {
-  contacts_.push_back(StaticContact{contact, reversed});
-  dJointSetData(joint, &contacts_.back());
-}
-
-const StaticContact* StaticContactLog::Of(dJointID joint) {
-  if (dJointGetType(joint) != dJointTypeContact) return nullptr;
-  return static_cast<const StaticContact*>(dJointGetData(joint));
-}
-
 ContactSolverSettings ContactSolverSettings::Of(dWorldID world) {
   ContactSolverSettings s;
   s.erp = dWorldGetERP(world);
@@ -26,23 +16,23 @@ ContactSolverSettings ContactSolverSettings::Of(dWorldID world) {
   return s;
 }
 
-bool IsStaticContactIsland(dBodyID body) {
+bool IsStaticContactIsland(dBodyID body, const StaticContactLog& log) {
   dJointID first = dBodyGetJoint(body, 0);
   if (!first || !StepsAsQuickStepsAFreeBody(body)) return false;
   for (int k = 0;; ++k) {
     dJointID j = k == 0 ? first : dBodyGetJoint(body, k);
     if (!j) return true;
     // The log keeps only contacts between a body and the static world.
-    if (!dJointIsEnabled(j) || !StaticContactLog::Of(j)) return false;
+    if (!dJointIsEnabled(j) || !log.Of(j)) return false;
   }
 }
 
 // Everything below follows ODE 0.16's order of operations (joints/contact.cpp, quickstep.cpp)
 // with ODE's own inline helpers: any other order changes the last bits.
-void ContactIslandStepper::AddContactRows(StaticContact sc, const dReal* position, const dReal* linear,
+void ContactIslandStepper::AddContactRows(const StaticContact& sc, const dReal* position, const dReal* linear,
                                           const dReal* angular, const ContactSolverSettings& settings, dReal fps) {
-  dContact& c = sc.contact;
-  dSurfaceParameters& s = c.surface;
+  const dContact& c = sc.contact;
+  dSurfaceParameters s = c.surface;  // getInfo1 clamps the friction coefficients in place
   const int mode = s.mode;
 
   // getInfo1: the row count, the friction coefficients made non-negative.
@@ -181,8 +171,8 @@ void ContactIslandStepper::AddContactRows(StaticContact sc, const dReal* positio
   }
 }
 
-void ContactIslandStepper::Step(dBodyID body, const dReal* gravity, const ContactSolverSettings& settings,
-                                int iterations, dReal dt) {
+void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const dReal* gravity,
+                                const ContactSolverSettings& settings, int iterations, dReal dt) {
   dMass mass;
   dBodyGetMass(body, &mass);
   const dReal* rotation = dBodyGetRotation(body);
@@ -216,7 +206,7 @@ void ContactIslandStepper::Step(dBodyID body, const dReal* gravity, const Contac
   for (int k = 0;; ++k) {
     dJointID j = dBodyGetJoint(body, k);
     if (!j) break;
-    AddContactRows(*StaticContactLog::Of(j), position, linear, angular, settings, fps);
+    AddContactRows(*log.Of(j), position, linear, angular, settings, fps);
   }
   dReal rhs_tmp[6];
   for (int k = 0; k < 3; ++k) rhs_tmp[k] = -(force[k] * inverse_mass + linear[k] * fps);

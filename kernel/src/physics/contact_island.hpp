@@ -4,7 +4,7 @@
 // bit as ODE does it.
 #pragma once
 
-#include <deque>
+#include <cstdint>
 #include <vector>
 
 #include <ode/ode.h>
@@ -21,19 +21,26 @@ struct StaticContact {
   bool reversed = false;  ///< the body was attached second: ODE turns the normal round
 };
 
-/// The static contacts of one step, each tied to its joint (the joint's user data) until Clear,
-/// which goes with emptying the contact joint group.
+/// The static contacts of one step, each tied to its joint (the joint's user data holds its
+/// place in the log) until Clear, which goes with emptying the contact joint group.
 class StaticContactLog {
  public:
   /// Keeps `contact` for `joint`, a contact joint between one body and the static world.
-  void Record(dJointID joint, const dContact& contact, bool reversed);
+  void Record(dJointID joint, const dContact& contact, bool reversed) {
+    contacts_.push_back(StaticContact{contact, reversed});
+    dJointSetData(joint, reinterpret_cast<void*>(static_cast<std::uintptr_t>(contacts_.size())));
+  }
   /// Forgets every contact: call with the joints' destruction.
   void Clear() { contacts_.clear(); }
-  /// The contact recorded for `joint`, or null (not a contact the log kept).
-  static const StaticContact* Of(dJointID joint);
+  /// The contact recorded for `joint`, or null (not a contact this log kept).
+  const StaticContact* Of(dJointID joint) const {
+    if (dJointGetType(joint) != dJointTypeContact) return nullptr;
+    const auto place = reinterpret_cast<std::uintptr_t>(dJointGetData(joint));
+    return place > 0 && place <= contacts_.size() ? &contacts_[place - 1] : nullptr;
+  }
 
  private:
-  std::deque<StaticContact> contacts_;  // a deque: growing keeps the joints' pointers valid
+  std::vector<StaticContact> contacts_;
 };
 
 /// The world's settings a contact's rows and QuickStep's solver read, taken once a step.
@@ -49,8 +56,8 @@ struct ContactSolverSettings {
 
 /// Whether `body` is an island ContactIslandStepper steps as QuickStep would: a body the kernel
 /// can step freely (StepsAsQuickStepsAFreeBody) with at least one joint, every joint an enabled
-/// contact with the static world that StaticContactLog kept.
-bool IsStaticContactIsland(dBodyID body);
+/// contact with the static world that `log` kept.
+bool IsStaticContactIsland(dBodyID body, const StaticContactLog& log);
 
 /// Steps static-contact islands (IsStaticContactIsland) the way ODE 0.16's QuickStep steps a
 /// one-body island, floating-point operation for floating-point operation: the contact joints'
@@ -64,9 +71,10 @@ class ContactIslandStepper {
   /// QuickStep shuffles its rows before this sweep and every eighth after (0-based): a step of
   /// fewer sweeps draws nothing from ODE's generator.
   static constexpr int kFirstShuffle = 8;
-  /// One step of `body` by `dt` seconds under `gravity` (the world's, m/s²), with `iterations`
-  /// SOR sweeps and the world's `settings`.
-  void Step(dBodyID body, const dReal* gravity, const ContactSolverSettings& settings, int iterations, dReal dt);
+  /// One step of `body` (IsStaticContactIsland with `log`) by `dt` seconds under `gravity` (the
+  /// world's, m/s²), with `iterations` SOR sweeps and the world's `settings`.
+  void Step(dBodyID body, const StaticContactLog& log, const dReal* gravity, const ContactSolverSettings& settings,
+            int iterations, dReal dt);
 
  private:
   // One constraint row, as QuickStep lays it out: the Jacobian (linear, angular) and its
@@ -82,7 +90,7 @@ class ContactIslandStepper {
   };
   // getInfo1 and getInfo2 of `c` for the body at `position` moving at `linear`/`angular`: its
   // rows appended to rows_, indices global.
-  void AddContactRows(StaticContact c, const dReal* position, const dReal* linear, const dReal* angular,
+  void AddContactRows(const StaticContact& c, const dReal* position, const dReal* linear, const dReal* angular,
                       const ContactSolverSettings& settings, dReal fps);
 
   InverseInertiaCache inverse_inertia_;

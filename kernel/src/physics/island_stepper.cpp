@@ -164,7 +164,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
       paused_.push_back(b);
     } else if (IsLoneBody(b)) {
       own_.push_back({b, false});
-    } else if (IsStaticContactIsland(b)) {
+    } else if (static_contacts_ && IsStaticContactIsland(b, *static_contacts_)) {
       own_.push_back({b, true});
       ++on_field;
     } else {
@@ -197,7 +197,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   if (on_field > 0) settings_ = ContactSolverSettings::Of(world);
   for (const OwnIsland& o : own_) {
     if (o.contacts) {
-      contact_stepper_.Step(o.body, gravity_, settings_, iterations, dt);
+      contact_stepper_.Step(o.body, *static_contacts_, gravity_, settings_, iterations, dt);
     } else {
       lone_stepper_.Step(o.body, gravity_, dt);
     }

@@ -210,6 +210,7 @@ void WorldImpl::Build() {
                                                   ph.max_contacts);
   const Broadphase broadphase = collision_->broadphase();
   islands_.SetMoveOrderMatters(broadphase == Broadphase::kSweepAndPrune || broadphase == Broadphase::kHash);
+  islands_.SetStaticContacts(&collision_->StaticContacts());
   for (const MaterialPair& p : model_.material_pairs) {
     collision_->materials().SetPair(p.a, p.b, p.surface);
   }
@@ -397,6 +398,7 @@ void WorldImpl::Rebuild() {
   held_.Release();  // its joint before the ODE world it is in
   hold_after_ns_ = 0;
   robots_.clear();
+  islands_.SetStaticContacts(nullptr);  // the log goes with the collision manager
   collision_.reset();
   scene_.reset();
   world_.reset();

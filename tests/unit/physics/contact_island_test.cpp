@@ -241,8 +241,8 @@ TEST(ContactIslandStepper, EndsEveryStepBitForBitWhereQuickStepPutsTheBody) {
     dRandSetSeed(seed);
     std::vector<dBodyID> airborne;
     for (auto it = twins.rbegin(); it != twins.rend(); ++it) {
-      if (IsStaticContactIsland(it->kernel)) {
-        stepper.Step(it->kernel, gravity, settings, iterations, kStep);
+      if (IsStaticContactIsland(it->kernel, log)) {
+        stepper.Step(it->kernel, log, gravity, settings, iterations, kStep);
         ++islands;
       } else {
         ASSERT_EQ(dBodyGetJoint(it->kernel, 0), nullptr) << "only contacts with the floor here";
@@ -302,13 +302,13 @@ TEST(IsStaticContactIsland, LeavesToQuickStepWhatTheStepperDoesNotReproduce) {
   dBodyID on_floor = body();
   touch_floor(on_floor, true);
   touch_floor(on_floor, true);
-  EXPECT_TRUE(IsStaticContactIsland(on_floor));
-  EXPECT_FALSE(IsStaticContactIsland(body())) << "no contact: a lone body's";
+  EXPECT_TRUE(IsStaticContactIsland(on_floor, log));
+  EXPECT_FALSE(IsStaticContactIsland(body(), log)) << "no contact: a lone body's";
 
   dBodyID unlogged = body();
   touch_floor(unlogged, true);
   touch_floor(unlogged, false);
-  EXPECT_FALSE(IsStaticContactIsland(unlogged)) << "a contact the log did not keep";
+  EXPECT_FALSE(IsStaticContactIsland(unlogged, log)) << "a contact the log did not keep";
 
   dBodyID pushed = body();
   touch_floor(pushed, true);
@@ -316,26 +316,26 @@ TEST(IsStaticContactIsland, LeavesToQuickStepWhatTheStepperDoesNotReproduce) {
   dContact c{};
   c.surface.mode = dContactApprox1;
   dJointAttach(dJointCreateContact(world.get(), contacts.get(), &c), pushed, other);
-  EXPECT_FALSE(IsStaticContactIsland(pushed)) << "a contact with another body";
+  EXPECT_FALSE(IsStaticContactIsland(pushed, log)) << "a contact with another body";
 
   dBodyID hinged = body();
   touch_floor(hinged, true);
   dJointAttach(dJointCreateHinge(world.get(), nullptr), hinged, nullptr);
-  EXPECT_FALSE(IsStaticContactIsland(hinged)) << "a joint other than a contact";
+  EXPECT_FALSE(IsStaticContactIsland(hinged, log)) << "a joint other than a contact";
 
   dBodyID off = body();
   dJointDisable(touch_floor(off, true));
-  EXPECT_FALSE(IsStaticContactIsland(off)) << "a disabled contact";
+  EXPECT_FALSE(IsStaticContactIsland(off, log)) << "a disabled contact";
 
   dBodyID damped = body();
   touch_floor(damped, true);
   dBodySetLinearDamping(damped, 0.1);
-  EXPECT_FALSE(IsStaticContactIsland(damped)) << "damping: left to ODE";
+  EXPECT_FALSE(IsStaticContactIsland(damped, log)) << "damping: left to ODE";
 
   dBodyID asleep = body();
   touch_floor(asleep, true);
   dBodyDisable(asleep);
-  EXPECT_FALSE(IsStaticContactIsland(asleep)) << "disabled";
+  EXPECT_FALSE(IsStaticContactIsland(asleep, log)) << "disabled";
 }
 
 }  // namespace
