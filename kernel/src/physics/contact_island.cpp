@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "physics/contact_island.hpp"
 
-#include <cstring>
 #include <utility>
+
+#include "physics/free_body_start.hpp"
 
 namespace ubersim::kernel {
 
@@ -125,28 +126,22 @@ void ContactIslandStepper::AddContactRows(const StaticContact& sc, const dReal* 
       dPlaneSpace(normal, t1, t2);
     }
     int r = 1;
+    // A friction row along `t`: bounds ±coefficient, the surface's motion and slip if asked.
+    const auto friction_row = [&](const dReal* t, dReal coefficient, int motion_flag, dReal motion, int slip_flag,
+                                  dReal slip, int approx_flag) {
+      dCopyVector3(row[r].j, t);
+      dCalcVectorCross3(row[r].j + 3, c1, t);
+      if (mode & motion_flag) row[r].rhs = motion;
+      if (mode & slip_flag) row[r].cfm = slip;
+      row[r].lo = -coefficient;
+      row[r].hi = coefficient;
+      if (mode & approx_flag) row[r].findex = 0;
+      ++r;
+    };
     const dReal mu = s.mu;
-    if (mu > 0) {
-      dCopyVector3(row[r].j, t1);
-      dCalcVectorCross3(row[r].j + 3, c1, t1);
-      if (mode & dContactMotion1) row[r].rhs = s.motion1;
-      if (mode & dContactSlip1) row[r].cfm = s.slip1;
-      row[r].lo = -mu;
-      row[r].hi = mu;
-      if (mode & dContactApprox1_1) row[r].findex = 0;
-      ++r;
-    }
+    if (mu > 0) friction_row(t1, mu, dContactMotion1, s.motion1, dContactSlip1, s.slip1, dContactApprox1_1);
     const dReal mu2 = (mode & dContactMu2) ? s.mu2 : mu;
-    if (mu2 > 0) {
-      dCopyVector3(row[r].j, t2);
-      dCalcVectorCross3(row[r].j + 3, c1, t2);
-      if (mode & dContactMotion2) row[r].rhs = s.motion2;
-      if (mode & dContactSlip2) row[r].cfm = s.slip2;
-      row[r].lo = -mu2;
-      row[r].hi = mu2;
-      if (mode & dContactApprox1_2) row[r].findex = 0;
-      ++r;
-    }
+    if (mu2 > 0) friction_row(t2, mu2, dContactMotion2, s.motion2, dContactSlip2, s.slip2, dContactApprox1_2);
     if (mode & dContactRolling) {
       const dReal* axes[3] = {t1, t2, normal};
       const int approx[3] = {dContactApprox1_1, dContactApprox1_2, dContactApprox1_N};
@@ -173,30 +168,16 @@ void ContactIslandStepper::AddContactRows(const StaticContact& sc, const dReal* 
 
 void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const dReal* gravity,
                                 const ContactSolverSettings& settings, int iterations, dReal dt) {
-  dMass mass;
-  dBodyGetMass(body, &mass);
-  const dReal* rotation = dBodyGetRotation(body);
-
   // Stage 0: gravity, the world-frame inverse inertia, the gyroscopic torque.
-  dVector3 force, torque;
-  std::memcpy(force, dBodyGetForce(body), sizeof force);
-  std::memcpy(torque, dBodyGetTorque(body), sizeof torque);
-  if (dBodyGetGravityMode(body)) {
-    for (int k = 0; k < 3; ++k) {
-      if (gravity[k] != 0) force[k] += mass.mass * gravity[k];
-    }
+  FreeBodyStart b;
+  StartFreeBodyStep(body, gravity, inverse_inertia_, b);
+  if (dBodyGetGyroscopicMode(body) && b.inverse_mass > 0) {
+    AddImplicitGyroscopicTorque(b.mass, b.rotation, b.angular, dt, b.torque);
   }
-  dMatrix3 tmp = {};
-  dMatrix3 inverse_inertia = {};
-  dMultiply2_333(tmp, inverse_inertia_.Of(body, mass), rotation);
-  dMultiply0_333(inverse_inertia, rotation, tmp);
-  dVector3 linear, angular;
-  std::memcpy(linear, dBodyGetLinearVel(body), sizeof linear);
-  std::memcpy(angular, dBodyGetAngularVel(body), sizeof angular);
-  const dReal inverse_mass = dRecip(mass.mass);
-  if (dBodyGetGyroscopicMode(body) && inverse_mass > 0) {
-    AddImplicitGyroscopicTorque(mass, rotation, angular, dt, torque);
-  }
+  const dReal inverse_mass = b.inverse_mass;
+  const dReal* inverse_inertia = b.inverse_inertia;
+  dReal* linear = b.linear;
+  dReal* angular = b.angular;
 
   // Stage 2: the rows, joint by joint in the body's list (QuickStep's island order), and the
   // right-hand side c/h - J·(v/h + M⁻¹·f).
@@ -209,8 +190,8 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
     AddContactRows(*log.Of(j), position, linear, angular, settings, fps);
   }
   dReal rhs_tmp[6];
-  for (int k = 0; k < 3; ++k) rhs_tmp[k] = -(force[k] * inverse_mass + linear[k] * fps);
-  dMultiply0_331(rhs_tmp + 3, inverse_inertia, torque);
+  for (int k = 0; k < 3; ++k) rhs_tmp[k] = -(b.force[k] * inverse_mass + linear[k] * fps);
+  dMultiply0_331(rhs_tmp + 3, inverse_inertia, b.torque);
   for (int k = 0; k < 3; ++k) rhs_tmp[3 + k] = -(angular[k] * fps) - rhs_tmp[3 + k];
   for (Row& r : rows_) {
     dReal sum = 0;
@@ -286,7 +267,7 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
     linear[k] += dt * fc[k];
     angular[k] += dt * fc[3 + k];
   }
-  FinishBodyStep(body, inverse_mass, inverse_inertia, force, torque, linear, angular, dt);
+  FinishBodyStep(body, inverse_mass, inverse_inertia, b.force, b.torque, linear, angular, dt);
 }
 
 }  // namespace ubersim::kernel

@@ -3,6 +3,8 @@
 
 #include <cstring>
 
+#include "physics/free_body_start.hpp"
+
 namespace ubersim::kernel {
 
 bool StepsAsQuickStepsAFreeBody(dBodyID body) {
@@ -86,42 +88,19 @@ void FinishBodyStep(dBodyID body, dReal inverse_mass, const dReal* inverse_inert
 }
 
 void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
-  dMass mass;
-  dBodyGetMass(body, &mass);
-  const dReal* rotation = dBodyGetRotation(body);
-
-  dVector3 force, torque;
-  std::memcpy(force, dBodyGetForce(body), sizeof force);
-  std::memcpy(torque, dBodyGetTorque(body), sizeof torque);
-  if (dBodyGetGravityMode(body)) {
-    // Only the non-zero components: adding m·0 would turn a -0 force into +0.
-    for (int k = 0; k < 3; ++k) {
-      if (gravity[k] != 0) force[k] += mass.mass * gravity[k];
-    }
-  }
-
-  // The inverse inertia in the world frame.
-  dMatrix3 tmp = {};
-  dMatrix3 inverse_inertia = {};
-  dMultiply2_333(tmp, inverse_inertia_.Of(body, mass), rotation);
-  dMultiply0_333(inverse_inertia, rotation, tmp);
-
-  dVector3 angular;
-  std::memcpy(angular, dBodyGetAngularVel(body), sizeof angular);
-  const dReal inverse_mass = dRecip(mass.mass);
+  FreeBodyStart b;
+  StartFreeBodyStep(body, gravity, inverse_inertia_, b);
   // Turning only about a vertical principal axis (a one-body robot driving level: most steps of
   // most robots), the momentum lies along the turn and the gyroscopic torque is zero: its work
   // is skipped. QuickStep's implicit form computes it as zero but for the last bit of the turn
   // rate, so here the stepper agrees with QuickStep to rounding, not to the bit.
-  const bool about_principal_vertical = angular[0] == 0 && angular[1] == 0 && rotation[8] == 0 &&
-                                        rotation[9] == 0 && mass.I[2] == 0 && mass.I[6] == 0;
-  if (dBodyGetGyroscopicMode(body) && inverse_mass > 0 && !about_principal_vertical) {
-    AddImplicitGyroscopicTorque(mass, rotation, angular, dt, torque);
+  const dReal* rotation = b.rotation;
+  const bool about_principal_vertical = b.angular[0] == 0 && b.angular[1] == 0 && rotation[8] == 0 &&
+                                        rotation[9] == 0 && b.mass.I[2] == 0 && b.mass.I[6] == 0;
+  if (dBodyGetGyroscopicMode(body) && b.inverse_mass > 0 && !about_principal_vertical) {
+    AddImplicitGyroscopicTorque(b.mass, rotation, b.angular, dt, b.torque);
   }
-
-  dVector3 linear;
-  std::memcpy(linear, dBodyGetLinearVel(body), sizeof linear);
-  FinishBodyStep(body, inverse_mass, inverse_inertia, force, torque, linear, angular, dt);
+  FinishBodyStep(body, b.inverse_mass, b.inverse_inertia, b.force, b.torque, b.linear, b.angular, dt);
 }
 
 }  // namespace ubersim::kernel

@@ -17,24 +17,17 @@
 
 #include "physics/contact_island.hpp"
 #include "physics/ode_handles.hpp"
+#include "quickstep_twin.hpp"
 
 namespace {
 
-using ubersim::kernel::ContactIslandStepper;
-using ubersim::kernel::ContactSolverSettings;
-using ubersim::kernel::IsStaticContactIsland;
-using ubersim::kernel::OdeJointGroup;
-using ubersim::kernel::OdeLibrary;
-using ubersim::kernel::OdeSpace;
-using ubersim::kernel::OdeWorld;
-using ubersim::kernel::StaticContactLog;
+using namespace ubersim::kernel;  // NOLINT: the stepper, its log and ODE's handles
+using ubersim::test::StateDifference;
 
 constexpr double kStep = 0.005;
 
 OdeWorld MakeWorld() {
-  OdeWorld w(dWorldCreate());
-  dWorldSetGravity(w.get(), 0.2, 0, -9.81);  // a tilted gravity: two components to add
-  dWorldSetAutoDisableFlag(w.get(), 0);
+  OdeWorld w = ubersim::test::MakeTiltedWorld(0.2);
   // Not ODE's defaults: the stepper must take the world's own.
   dWorldSetERP(w.get(), 0.35);
   dWorldSetCFM(w.get(), 3e-6);
@@ -42,33 +35,6 @@ OdeWorld MakeWorld() {
   dWorldSetContactMaxCorrectingVel(w.get(), 0.6);
   dWorldSetQuickStepW(w.get(), 1.2);
   return w;
-}
-
-std::string BitDifference(const char* what, const dReal* a, const dReal* b, int n) {
-  for (int i = 0; i < n; ++i) {
-    if (std::memcmp(&a[i], &b[i], sizeof(dReal)) != 0) {
-      return std::string(what) + "[" + std::to_string(i) + "]: " + std::to_string(a[i]) + " vs " +
-             std::to_string(b[i]);
-    }
-  }
-  return "";
-}
-
-// Every bit of the state QuickStep writes, or the first difference.
-std::string StateDifference(dBodyID a, dBodyID b) {
-  const std::array<std::string, 7> diffs = {
-      BitDifference("position", dBodyGetPosition(a), dBodyGetPosition(b), 3),
-      BitDifference("quaternion", dBodyGetQuaternion(a), dBodyGetQuaternion(b), 4),
-      BitDifference("rotation", dBodyGetRotation(a), dBodyGetRotation(b), 11),
-      BitDifference("linear velocity", dBodyGetLinearVel(a), dBodyGetLinearVel(b), 3),
-      BitDifference("angular velocity", dBodyGetAngularVel(a), dBodyGetAngularVel(b), 3),
-      BitDifference("force", dBodyGetForce(a), dBodyGetForce(b), 3),
-      BitDifference("torque", dBodyGetTorque(a), dBodyGetTorque(b), 3),
-  };
-  for (const std::string& d : diffs) {
-    if (!d.empty()) return d;
-  }
-  return "";
 }
 
 // One body in each world, with its geometry in that world's space.
@@ -282,13 +248,7 @@ TEST(IsStaticContactIsland, LeavesToQuickStepWhatTheStepperDoesNotReproduce) {
   OdeWorld world = MakeWorld();
   OdeJointGroup contacts(dJointGroupCreate(0));
   StaticContactLog log;
-  auto body = [&] {
-    dBodyID b = dBodyCreate(world.get());
-    dMass m;
-    dMassSetSphereTotal(&m, 1.0, 0.1);
-    dBodySetMass(b, &m);
-    return b;
-  };
+  auto body = [&] { return ubersim::test::MakeBall(world.get()); };
   auto touch_floor = [&](dBodyID b, bool logged) {
     dContact c{};
     c.geom.normal[2] = 1;

@@ -15,6 +15,7 @@
 
 #include "physics/lone_body.hpp"
 #include "physics/ode_handles.hpp"
+#include "quickstep_twin.hpp"
 
 namespace {
 
@@ -23,43 +24,11 @@ using ubersim::kernel::LoneBodyStepper;
 using ubersim::kernel::OdeLibrary;
 using ubersim::kernel::OdeSpace;
 using ubersim::kernel::OdeWorld;
+using ubersim::test::StateDifference;
 
 constexpr double kStep = 0.005;
 
-OdeWorld MakeWorld() {
-  OdeWorld w(dWorldCreate());
-  dWorldSetGravity(w.get(), 0.3, 0, -9.81);  // a tilted gravity: two components to add
-  dWorldSetAutoDisableFlag(w.get(), 0);
-  return w;
-}
-
-// The first `n` values of a and b differ in some bit: names the first that does.
-std::string BitDifference(const char* what, const dReal* a, const dReal* b, int n) {
-  for (int i = 0; i < n; ++i) {
-    if (std::memcmp(&a[i], &b[i], sizeof(dReal)) != 0) {
-      return std::string(what) + "[" + std::to_string(i) + "]: " + std::to_string(a[i]) + " vs " +
-             std::to_string(b[i]);
-    }
-  }
-  return "";
-}
-
-// Every bit of the state QuickStep writes, or the first difference.
-std::string StateDifference(dBodyID a, dBodyID b) {
-  const std::array<std::string, 7> diffs = {
-      BitDifference("position", dBodyGetPosition(a), dBodyGetPosition(b), 3),
-      BitDifference("quaternion", dBodyGetQuaternion(a), dBodyGetQuaternion(b), 4),
-      BitDifference("rotation", dBodyGetRotation(a), dBodyGetRotation(b), 11),
-      BitDifference("linear velocity", dBodyGetLinearVel(a), dBodyGetLinearVel(b), 3),
-      BitDifference("angular velocity", dBodyGetAngularVel(a), dBodyGetAngularVel(b), 3),
-      BitDifference("force", dBodyGetForce(a), dBodyGetForce(b), 3),
-      BitDifference("torque", dBodyGetTorque(a), dBodyGetTorque(b), 3),
-  };
-  for (const std::string& d : diffs) {
-    if (!d.empty()) return d;
-  }
-  return "";
-}
+OdeWorld MakeWorld() { return ubersim::test::MakeTiltedWorld(0.3); }
 
 // A body with a random inertia tensor (a box turned arbitrarily: off-diagonal terms), pose and
 // velocities, the same in both worlds.
@@ -227,13 +196,7 @@ TEST(LoneBodyStepper, TellsTheGeometriesTheBodyMoved) {
 TEST(IsLoneBody, LeavesToOdeWhatTheStepperDoesNotReproduce) {
   OdeLibrary ode;
   OdeWorld world = MakeWorld();
-  auto body = [&] {
-    dBodyID b = dBodyCreate(world.get());
-    dMass m;
-    dMassSetSphereTotal(&m, 1.0, 0.1);
-    dBodySetMass(b, &m);
-    return b;
-  };
+  auto body = [&] { return ubersim::test::MakeBall(world.get()); };
   EXPECT_TRUE(IsLoneBody(body()));
 
   // Each case: what makes the body QuickStep's, set on a fresh body.

@@ -1,0 +1,47 @@
+// SPDX-License-Identifier: Apache-2.0
+// The start of QuickStep's step of one body (its stage 0), shared by the kernel's steppers.
+#pragma once
+
+#include <ode/ode.h>
+
+#include "physics/lone_body.hpp"
+
+namespace ubersim::kernel {
+
+/// A body's state as QuickStep's stage 0 leaves it: gravity in the force, the world-frame inverse
+/// inertia, the velocities read.
+struct FreeBodyStart {
+  dMass mass{};
+  const dReal* rotation = nullptr;  ///< the body's, ODE's 3×4
+  dVector3 force{};                 ///< the accumulated force, gravity added, N
+  dVector3 torque{};                ///< the accumulated torque, N·m
+  dVector3 linear{};                ///< linear velocity, m/s
+  dVector3 angular{};               ///< angular velocity, rad/s
+  dMatrix3 inverse_inertia{};       ///< world frame
+  dReal inverse_mass = 0;           ///< 1/kg, as dBodySetMass stored it
+};
+
+/// Reads `body` under `gravity` (the world's, m/s²) as QuickStep's stage 0 does, operation for
+/// operation; the gyroscopic torque is left to the caller.
+inline void StartFreeBodyStep(dBodyID body, const dReal* gravity, InverseInertiaCache& cache, FreeBodyStart& s) {
+  dBodyGetMass(body, &s.mass);
+  s.rotation = dBodyGetRotation(body);
+  for (int k = 0; k < 3; ++k) {
+    s.force[k] = dBodyGetForce(body)[k];
+    s.torque[k] = dBodyGetTorque(body)[k];
+    s.linear[k] = dBodyGetLinearVel(body)[k];
+    s.angular[k] = dBodyGetAngularVel(body)[k];
+  }
+  if (dBodyGetGravityMode(body)) {
+    // Only the non-zero components: adding m·0 would turn a -0 force into +0.
+    for (int k = 0; k < 3; ++k) {
+      if (gravity[k] != 0) s.force[k] += s.mass.mass * gravity[k];
+    }
+  }
+  dMatrix3 tmp = {};
+  dMultiply2_333(tmp, cache.Of(body, s.mass), s.rotation);
+  dMultiply0_333(s.inverse_inertia, s.rotation, tmp);
+  s.inverse_mass = dRecip(s.mass.mass);
+}
+
+}  // namespace ubersim::kernel
