@@ -3,9 +3,64 @@
 
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "physics/free_body_start.hpp"
 
 namespace ubersim::kernel {
+namespace {
+
+// M⁻¹·Jᵀ·λ of one body as the sweeps build it (QuickStep's `fc`), held in registers. With SSE2
+// the six lanes go two at a time: each lane's products and sums are the scalar ones, and the
+// dot product still adds its six terms in QuickStep's order, so the bits are the same.
+class ConstraintVelocity {
+ public:
+#if defined(__SSE2__)
+  // fc·j, summed first to last.
+  dReal Dot(const dReal* j) const {
+    const __m128d p01 = _mm_mul_pd(v01_, _mm_loadu_pd(j));
+    const __m128d p23 = _mm_mul_pd(v23_, _mm_loadu_pd(j + 2));
+    const __m128d p45 = _mm_mul_pd(v45_, _mm_loadu_pd(j + 4));
+    dReal sum = _mm_cvtsd_f64(p01) + _mm_cvtsd_f64(_mm_unpackhi_pd(p01, p01));
+    sum += _mm_cvtsd_f64(p23);
+    sum += _mm_cvtsd_f64(_mm_unpackhi_pd(p23, p23));
+    sum += _mm_cvtsd_f64(p45);
+    return sum + _mm_cvtsd_f64(_mm_unpackhi_pd(p45, p45));
+  }
+  // fc += delta·imj.
+  void Add(dReal delta, const dReal* imj) {
+    const __m128d d = _mm_set1_pd(delta);
+    v01_ = _mm_add_pd(v01_, _mm_mul_pd(d, _mm_loadu_pd(imj)));
+    v23_ = _mm_add_pd(v23_, _mm_mul_pd(d, _mm_loadu_pd(imj + 2)));
+    v45_ = _mm_add_pd(v45_, _mm_mul_pd(d, _mm_loadu_pd(imj + 4)));
+  }
+  void Store(dReal* out) const {
+    _mm_storeu_pd(out, v01_);
+    _mm_storeu_pd(out + 2, v23_);
+    _mm_storeu_pd(out + 4, v45_);
+  }
+
+ private:
+  __m128d v01_ = _mm_setzero_pd(), v23_ = _mm_setzero_pd(), v45_ = _mm_setzero_pd();
+#else
+  dReal Dot(const dReal* j) const {
+    return v_[0] * j[0] + v_[1] * j[1] + v_[2] * j[2] + v_[3] * j[3] + v_[4] * j[4] + v_[5] * j[5];
+  }
+  void Add(dReal delta, const dReal* imj) {
+    for (int k = 0; k < 6; ++k) v_[k] += delta * imj[k];
+  }
+  void Store(dReal* out) const {
+    for (int k = 0; k < 6; ++k) out[k] = v_[k];
+  }
+
+ private:
+  dReal v_[6] = {0, 0, 0, 0, 0, 0};
+#endif
+};
+
+}  // namespace
 
 ContactSolverSettings ContactSolverSettings::Of(dWorldID world) {
   ContactSolverSettings s;
@@ -75,13 +130,14 @@ void ContactIslandStepper::AddContactRows(const StaticContact& sc, const dReal* 
 
   // QuickStep's blank rows, then getInfo2 for a joint whose second body is the static world.
   const std::size_t first = rows_.size();
-  Row blank{};
-  blank.cfm = settings.cfm;
-  blank.lo = -dInfinity;
-  blank.hi = dInfinity;
-  blank.findex = -1;
-  rows_.resize(first + static_cast<std::size_t>(m), blank);
+  rows_.resize(first + static_cast<std::size_t>(m));  // zeroed: the Jacobian and right-hand side
   Row* row = &rows_[first];
+  for (int i = 0; i < m; ++i) {
+    row[i].cfm = settings.cfm;
+    row[i].lo = -dInfinity;
+    row[i].hi = dInfinity;
+    row[i].findex = -1;
+  }
 
   const dReal erp = (mode & dContactSoftERP) ? s.soft_erp : settings.erp;
   const dReal k = fps * erp;
@@ -193,38 +249,34 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
   for (int k = 0; k < 3; ++k) rhs_tmp[k] = -(b.force[k] * inverse_mass + linear[k] * fps);
   dMultiply0_331(rhs_tmp + 3, inverse_inertia, b.torque);
   for (int k = 0; k < 3; ++k) rhs_tmp[3 + k] = -(angular[k] * fps) - rhs_tmp[3 + k];
+
+  // Then, row by row (QuickStep does each stage for all rows, but no row depends on another):
+  // J·rhs_tmp into the right-hand side, M⁻¹·Jᵀ, and the row scaled by its relaxed diagonal.
+  const int m = static_cast<int>(rows_.size());
   for (Row& r : rows_) {
     dReal sum = 0;
     for (int k = 0; k < 6; ++k) sum += r.j[k] * rhs_tmp[k];
     r.rhs += sum;
-  }
-
-  // Stage 4: M⁻¹·Jᵀ, each row scaled by its relaxed diagonal, unbounded rows first.
-  const int m = static_cast<int>(rows_.size());
-  order_.clear();
-  for (Row& r : rows_) {
     for (int k = 0; k < 3; ++k) r.imj[k] = inverse_mass * r.j[k];
     dMultiply0_331(r.imj + 3, inverse_inertia, r.j + 3);
-  }
-  for (Row& r : rows_) {
-    dReal sum = 0;
-    for (int k = 0; k < 6; ++k) sum += r.imj[k] * r.j[k];
-    const dReal ad = settings.sor_w / (sum + r.cfm);
+    dReal diagonal = 0;
+    for (int k = 0; k < 6; ++k) diagonal += r.imj[k] * r.j[k];
+    const dReal ad = settings.sor_w / (diagonal + r.cfm);
     r.cfm = r.cfm * ad;
     r.rhs *= ad;
     for (dReal& v : r.j) v *= ad;
+    r.lambda = 0;
   }
+  // Stage 4: unbounded rows first, then the SOR sweeps. QuickStep shuffles the order before
+  // every eighth sweep after the first eight, with ODE's generator.
+  order_.clear();
   for (int i = 0; i < m; ++i) {
     if (rows_[static_cast<std::size_t>(i)].findex == -1) order_.push_back(i);
   }
   for (int i = 0; i < m; ++i) {
     if (rows_[static_cast<std::size_t>(i)].findex != -1) order_.push_back(i);
   }
-  lambda_.assign(static_cast<std::size_t>(m), 0);
-  dReal fc[6] = {0, 0, 0, 0, 0, 0};
-
-  // The SOR sweeps. QuickStep shuffles the order before every eighth sweep after the first
-  // eight, with ODE's generator.
+  ConstraintVelocity fc;
   for (int iteration = 0; iteration < iterations; ++iteration) {
     if (iteration >= kFirstShuffle && iteration % kFirstShuffle == 0) {
       for (int index = 1; index < m; ++index) {
@@ -233,14 +285,13 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
       }
     }
     for (const int index : order_) {
-      const Row& r = rows_[static_cast<std::size_t>(index)];
-      dReal& lambda = lambda_[static_cast<std::size_t>(index)];
-      const dReal old_lambda = lambda;
+      Row& r = rows_[static_cast<std::size_t>(index)];
+      const dReal old_lambda = r.lambda;
       dReal delta = r.rhs - old_lambda * r.cfm;
-      delta -= fc[0] * r.j[0] + fc[1] * r.j[1] + fc[2] * r.j[2] + fc[3] * r.j[3] + fc[4] * r.j[4] + fc[5] * r.j[5];
+      delta -= fc.Dot(r.j);
       dReal hi, lo;
       if (r.findex != -1) {
-        hi = dFabs(r.hi * lambda_[static_cast<std::size_t>(r.findex)]);
+        hi = dFabs(r.hi * rows_[static_cast<std::size_t>(r.findex)].lambda);
         lo = -hi;
       } else {
         hi = r.hi;
@@ -249,23 +300,23 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
       const dReal new_lambda = old_lambda + delta;
       if (new_lambda < lo) {
         delta = lo - old_lambda;
-        lambda = lo;
+        r.lambda = lo;
       } else if (new_lambda > hi) {
         delta = hi - old_lambda;
-        lambda = hi;
+        r.lambda = hi;
       } else {
-        lambda = new_lambda;
+        r.lambda = new_lambda;
       }
-      if (delta != 0) {
-        for (int k = 0; k < 6; ++k) fc[k] += delta * r.imj[k];
-      }
+      if (delta != 0) fc.Add(delta, r.imj);
     }
   }
+  dReal velocity_change[6];
+  fc.Store(velocity_change);
 
   // Stage 4b: the constraint forces' velocity change; then the body's step as a free body's.
   for (int k = 0; k < 3; ++k) {
-    linear[k] += dt * fc[k];
-    angular[k] += dt * fc[3 + k];
+    linear[k] += dt * velocity_change[k];
+    angular[k] += dt * velocity_change[3 + k];
   }
   FinishBodyStep(body, inverse_mass, inverse_inertia, b.force, b.torque, linear, angular, dt);
 }

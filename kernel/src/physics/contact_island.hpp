@@ -78,15 +78,16 @@ class ContactIslandStepper {
 
  private:
   // One constraint row, as QuickStep lays it out: the Jacobian (linear, angular) and its
-  // inverse-mass image, right-hand side, mixing, bounds and friction index.
+  // inverse-mass image, right-hand side, mixing, bounds, friction index, and its multiplier.
   struct Row {
     dReal j[6];
+    dReal imj[6];
     dReal rhs;
     dReal cfm;
     dReal lo;
     dReal hi;
+    dReal lambda;
     int findex;
-    dReal imj[6];
   };
   // getInfo1 and getInfo2 of `c` for the body at `position` moving at `linear`/`angular`: its
   // rows appended to rows_, indices global.
@@ -96,7 +97,6 @@ class ContactIslandStepper {
   InverseInertiaCache inverse_inertia_;
   std::vector<Row> rows_;
   std::vector<int> order_;
-  std::vector<dReal> lambda_;
 };
 
 }  // namespace ubersim::kernel
