@@ -129,10 +129,13 @@ void ContactIslandStepper::AddContactRows(const StaticContact& sc, const dReal* 
   }
 
   // QuickStep's blank rows, then getInfo2 for a joint whose second body is the static world.
-  const std::size_t first = rows_.size();
-  rows_.resize(first + static_cast<std::size_t>(m));  // zeroed: the Jacobian and right-hand side
+  const std::size_t first = row_count_;
+  row_count_ += static_cast<std::size_t>(m);
+  if (rows_.size() < row_count_) rows_.resize(2 * row_count_);  // grown, never shrunk: no per-step fill
   Row* row = &rows_[first];
   for (int i = 0; i < m; ++i) {
+    for (dReal& v : row[i].j) v = 0;
+    row[i].rhs = 0;
     row[i].cfm = settings.cfm;
     row[i].lo = -dInfinity;
     row[i].hi = dInfinity;
@@ -238,7 +241,7 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
   // Stage 2: the rows, joint by joint in the body's list (QuickStep's island order), and the
   // right-hand side c/h - J·(v/h + M⁻¹·f).
   const dReal fps = dRecip(dt);
-  rows_.clear();
+  row_count_ = 0;
   const dReal* position = dBodyGetPosition(body);
   for (int k = 0;; ++k) {
     dJointID j = dBodyGetJoint(body, k);
@@ -252,8 +255,9 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
 
   // Then, row by row (QuickStep does each stage for all rows, but no row depends on another):
   // J·rhs_tmp into the right-hand side, M⁻¹·Jᵀ, and the row scaled by its relaxed diagonal.
-  const int m = static_cast<int>(rows_.size());
-  for (Row& r : rows_) {
+  const int m = static_cast<int>(row_count_);
+  for (int i = 0; i < m; ++i) {
+    Row& r = rows_[static_cast<std::size_t>(i)];
     dReal sum = 0;
     for (int k = 0; k < 6; ++k) sum += r.j[k] * rhs_tmp[k];
     r.rhs += sum;

@@ -90,12 +90,13 @@ class ContactIslandStepper {
     int findex;
   };
   // getInfo1 and getInfo2 of `c` for the body at `position` moving at `linear`/`angular`: its
-  // rows appended to rows_, indices global.
+  // rows appended after the row_count_ of rows_, indices global.
   void AddContactRows(const StaticContact& c, const dReal* position, const dReal* linear, const dReal* angular,
                       const ContactSolverSettings& settings, dReal fps);
 
   InverseInertiaCache inverse_inertia_;
-  std::vector<Row> rows_;
+  std::vector<Row> rows_;       // the first row_count_ are this step's
+  std::size_t row_count_ = 0;
   std::vector<int> order_;
 };
 
