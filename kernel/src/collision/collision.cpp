@@ -244,6 +244,7 @@ CollisionManager::CollisionManager(SceneGraph& graph, Broadphase broadphase, int
       scratch_(static_cast<std::size_t>(kContactCandidates)) {
   graph_.SetGeomListener([this](GeomImpl& g) { File(g); }, [this](GeomImpl&) { field_grouped_ = false; });
   SetBroadphase(broadphase);
+  static_contacts_.Bind(graph_.world(), contacts_.get());
 }
 
 CollisionManager::~CollisionManager() {
@@ -927,7 +928,6 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double
   const SurfaceMaterial& pair_surface = PairSurface(a, b);
   // The geometry with directional friction (an omni wheel) decides the friction direction.
   const GeomImpl* directional = a.friction_axis() ? &a : (b.friction_axis() ? &b : nullptr);
-  dWorldID world = graph_.world();
   for (int i = 0; i < n; ++i) {
     const dContactGeom& cg = scratch_[static_cast<std::size_t>(i)];
     SurfaceMaterial& surface = contact_surface_;
@@ -1069,12 +1069,9 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double
       c.surface.slip2 = surface.slip;
     }
     c.surface.mode = mode;
-    dJointID j = dJointCreateContact(world, contacts_.get(), &c);
-    dBodyID body_a = a.body() ? a.body()->id() : nullptr;
-    dBodyID body_b = b.body() ? b.body()->id() : nullptr;
-    dJointAttach(j, body_a, body_b);
-    // A body touching only the static world is solved by the kernel (IslandStepper), from this copy.
-    if (!body_a != !body_b) static_contacts_.Record(j, c, !body_a);
+    // A body touching only the static world keeps its contacts out of ODE: the kernel solves it
+    // (IslandStepper), and makes them joints if QuickStep must.
+    static_contacts_.Make(c, a.body() ? a.body()->id() : nullptr, b.body() ? b.body()->id() : nullptr);
     ++stats_.contacts;
   }
 }

@@ -145,8 +145,9 @@ class CollisionManager {
   const std::vector<dBodyID>& RobotsInContact() const { return robots_in_contact_; }
   /// Removes the contact joints of the last step.
   void ClearContacts();
-  /// The contacts of this step between a body and the static world, as given to ODE.
-  const StaticContactLog& StaticContacts() const { return static_contacts_; }
+  /// The contacts of this step between a body and the static world: those of a body touching
+  /// nothing else are not ODE joints unless made so (StaticContactLog::Join).
+  StaticContactLog& StaticContacts() { return static_contacts_; }
   /// Files every geometry anew (SetBroadphase: in creation order) and drops every cache that may
   /// name one: whenever robots come or go. A world built anew from the same robots in the same
   /// order (a snapshot's) then pairs as the original does.
@@ -252,7 +253,7 @@ class CollisionManager {
   CollisionStats stats_;
   OdeSpace space_;        // only for the ODE broadphases
   OdeJointGroup contacts_;
-  StaticContactLog static_contacts_;  // the contacts with the static world, for the kernel's solver
+  StaticContactLog static_contacts_;  // makes every contact joint; keeps the static ones it can
   std::vector<dContactGeom> scratch_;
   double swept_ball_step_ = 0.0;
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> ball_touching_;  // this step's ball pairs

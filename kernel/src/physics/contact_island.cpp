@@ -72,15 +72,63 @@ ContactSolverSettings ContactSolverSettings::Of(dWorldID world) {
   return s;
 }
 
-bool IsStaticContactIsland(dBodyID body, const StaticContactLog& log) {
-  dJointID first = dBodyGetJoint(body, 0);
-  if (!first || !StepsAsQuickStepsAFreeBody(body)) return false;
-  for (int k = 0;; ++k) {
-    dJointID j = k == 0 ? first : dBodyGetJoint(body, k);
-    if (!j) return true;
-    // The log keeps only contacts between a body and the static world.
-    if (!dJointIsEnabled(j) || !log.Of(j)) return false;
+StaticContactLog::BodyContacts& StaticContactLog::Of(dBodyID body) {
+  if (last_ < bodies_.size() && bodies_[last_].body == body) return bodies_[last_];
+  for (last_ = 0; last_ < bodies_.size(); ++last_) {
+    if (bodies_[last_].body == body) return bodies_[last_];
   }
+  bodies_.push_back({body, -1, false});
+  return bodies_.back();
+}
+
+void StaticContactLog::MakeJoint(const StaticContact& c) {
+  dJointID j = dJointCreateContact(world_, group_, &c.contact);
+  if (c.reversed) {
+    dJointAttach(j, nullptr, c.body);
+  } else {
+    dJointAttach(j, c.body, nullptr);
+  }
+}
+
+void StaticContactLog::Make(const dContact& contact, dBodyID a, dBodyID b) {
+  if (!keep_ || (a && b)) {
+    if (keep_) {
+      Join(a);
+      Join(b);
+    }
+    dJointAttach(dJointCreateContact(world_, group_, &contact), a, b);
+    return;
+  }
+  dBodyID body = a ? a : b;
+  BodyContacts& owner = Of(body);
+  contacts_.push_back(StaticContact{contact, body, a == nullptr, owner.newest});
+  owner.newest = static_cast<int>(contacts_.size()) - 1;
+  if (owner.joined) MakeJoint(contacts_.back());
+}
+
+void StaticContactLog::Join(dBodyID body) {
+  BodyContacts& owner = Of(body);
+  if (owner.joined) return;
+  owner.joined = true;
+  // Oldest first: walk back from the newest, then make them forward.
+  int count = 0;
+  for (int i = owner.newest; i >= 0; i = contacts_[static_cast<std::size_t>(i)].previous) ++count;
+  for (int k = count - 1; k >= 0; --k) {
+    int i = owner.newest;
+    for (int step = 0; step < k; ++step) i = contacts_[static_cast<std::size_t>(i)].previous;
+    MakeJoint(contacts_[static_cast<std::size_t>(i)]);
+  }
+}
+
+const StaticContact* StaticContactLog::Kept(dBodyID body) const {
+  for (const BodyContacts& b : bodies_) {
+    if (b.body == body) return b.joined || b.newest < 0 ? nullptr : &contacts_[static_cast<std::size_t>(b.newest)];
+  }
+  return nullptr;
+}
+
+bool IsStaticContactIsland(dBodyID body, const StaticContactLog& log) {
+  return log.Kept(body) && dBodyGetJoint(body, 0) == nullptr && StepsAsQuickStepsAFreeBody(body);
 }
 
 // Everything below follows ODE 0.16's order of operations (joints/contact.cpp, quickstep.cpp)
@@ -243,10 +291,9 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
   const dReal fps = dRecip(dt);
   row_count_ = 0;
   const dReal* position = dBodyGetPosition(body);
-  for (int k = 0;; ++k) {
-    dJointID j = dBodyGetJoint(body, k);
-    if (!j) break;
-    AddContactRows(*log.Of(j), position, linear, angular, settings, fps);
+  // Newest first: the order of the body's joint list, had they been ODE joints.
+  for (const StaticContact* c = log.Kept(body); c; c = c->previous >= 0 ? &log.At(c->previous) : nullptr) {
+    AddContactRows(*c, position, linear, angular, settings, fps);
   }
   dReal rhs_tmp[6];
   for (int k = 0; k < 3; ++k) rhs_tmp[k] = -(b.force[k] * inverse_mass + linear[k] * fps);

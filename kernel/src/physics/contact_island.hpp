@@ -4,7 +4,6 @@
 // bit as ODE does it.
 #pragma once
 
-#include <cstdint>
 #include <vector>
 
 #include <ode/ode.h>
@@ -13,34 +12,64 @@
 
 namespace ubersim::kernel {
 
-/// A contact of one body with the static world as the kernel gave it to ODE. ODE keeps its own
-/// copy inside the joint and gives none back; ContactIslandStepper writes the contact's
-/// constraint rows from this one.
+/// A contact of one body with the static world, as the kernel makes it for ODE.
+/// ContactIslandStepper writes the contact's constraint rows from it.
 struct StaticContact {
-  dContact contact{};     ///< as passed to dJointCreateContact
-  bool reversed = false;  ///< the body was attached second: ODE turns the normal round
+  dContact contact{};     ///< as given to dJointCreateContact
+  dBodyID body = nullptr; ///< the body touching the static world
+  bool reversed = false;  ///< the body is the contact's second: ODE turns the normal round
+  int previous = -1;      ///< the body's contact made before this one (-1: none)
 };
 
-/// The static contacts of one step, each tied to its joint (the joint's user data holds its
-/// place in the log) until Clear, which goes with emptying the contact joint group.
+/// Makes a step's contact joints, and keeps a body's contacts with the static world out of ODE
+/// while that body touches nothing else (the kernel steps such a body: ContactIslandStepper).
+/// Every joint is made in the order its contact came, so a body QuickStep does step finds its
+/// joints as it would have: a body's kept contacts become joints (Join) before any other joint
+/// is made for it this step.
 class StaticContactLog {
  public:
-  /// Keeps `contact` for `joint`, a contact joint between one body and the static world.
-  void Record(dJointID joint, const dContact& contact, bool reversed) {
-    contacts_.push_back(StaticContact{contact, reversed});
-    dJointSetData(joint, reinterpret_cast<void*>(static_cast<std::uintptr_t>(contacts_.size())));
+  /// Where joints are made: `world`, its contact joint group.
+  void Bind(dWorldID world, dJointGroupID group) {
+    world_ = world;
+    group_ = group;
   }
-  /// Forgets every contact: call with the joints' destruction.
-  void Clear() { contacts_.clear(); }
-  /// The contact recorded for `joint`, or null (not a contact this log kept).
-  const StaticContact* Of(dJointID joint) const {
-    if (dJointGetType(joint) != dJointTypeContact) return nullptr;
-    const auto place = reinterpret_cast<std::uintptr_t>(dJointGetData(joint));
-    return place > 0 && place <= contacts_.size() ? &contacts_[place - 1] : nullptr;
+  /// Whether a body's contacts with the static world are kept out of ODE until Join (off: every
+  /// contact is an ODE joint at once, for a caller stepping with QuickStep alone). The caller
+  /// that keeps them steps their bodies with IslandStepper, which joins what QuickStep steps.
+  void KeepStaticContacts(bool keep) { keep_ = keep; }
+  /// A contact between bodies `a` and `b` (either null: the static world, not both), attached
+  /// in that order.
+  void Make(const dContact& contact, dBodyID a, dBodyID b);
+  /// Makes `body`'s kept contacts ODE joints, in the order they came; its later contacts are
+  /// made joints at once.
+  void Join(dBodyID body);
+  /// The newest of `body`'s kept contacts (earlier ones through `previous`), or null: none, or
+  /// made joints.
+  const StaticContact* Kept(dBodyID body) const;
+  /// The contact `previous` names.
+  const StaticContact& At(int index) const { return contacts_[static_cast<std::size_t>(index)]; }
+  /// Forgets every contact: call with emptying the contact joint group.
+  void Clear() {
+    contacts_.clear();
+    bodies_.clear();
+    last_ = 0;
   }
 
  private:
+  struct BodyContacts {
+    dBodyID body;
+    int newest;   // its newest contact with the static world, -1: none
+    bool joined;  // its contacts are ODE joints
+  };
+  BodyContacts& Of(dBodyID body);
+  void MakeJoint(const StaticContact& c);
+
+  dWorldID world_ = nullptr;
+  dJointGroupID group_ = nullptr;
+  bool keep_ = false;
   std::vector<StaticContact> contacts_;
+  std::vector<BodyContacts> bodies_;  // the bodies with contacts this step
+  std::size_t last_ = 0;              // the last one asked for: a body's contacts come together
 };
 
 /// The world's settings a contact's rows and QuickStep's solver read, taken once a step.
@@ -55,8 +84,7 @@ struct ContactSolverSettings {
 };
 
 /// Whether `body` is an island ContactIslandStepper steps as QuickStep would: a body the kernel
-/// can step freely (StepsAsQuickStepsAFreeBody) with at least one joint, every joint an enabled
-/// contact with the static world that `log` kept.
+/// can step freely (StepsAsQuickStepsAFreeBody) with contacts `log` kept and no ODE joint.
 bool IsStaticContactIsland(dBodyID body, const StaticContactLog& log);
 
 /// Steps static-contact islands (IsStaticContactIsland) the way ODE 0.16's QuickStep steps a

@@ -160,14 +160,16 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     dBodyID b = bodies[i];
     if (!dBodyIsEnabled(b)) continue;
+    const bool kept = static_contacts_ && static_contacts_->Kept(b);
     if (!InPass(i, pass)) {
       paused_.push_back(b);
-    } else if (IsLoneBody(b)) {
-      own_.push_back({b, false});
-    } else if (static_contacts_ && IsStaticContactIsland(b, *static_contacts_)) {
+    } else if (kept && IsStaticContactIsland(b, *static_contacts_)) {
       own_.push_back({b, true});
       ++on_field;
+    } else if (!kept && IsLoneBody(b)) {
+      own_.push_back({b, false});
     } else {
+      if (kept) static_contacts_->Join(b);  // QuickStep's: its contacts become ODE joints
       ++solved;
       if (IsLimb(i)) held_.push_back(b);  // a limb has a joint: never lone
     }
@@ -176,6 +178,9 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
     // QuickStep shuffles an island's rows with ODE's generator from its ninth sweep on, island
     // after island in its own order: the kernel's islands drawing before or after all of its
     // islands would change every draw. Such a pass leaves them to QuickStep.
+    for (const OwnIsland& o : own_) {
+      if (o.contacts) static_contacts_->Join(o.body);
+    }
     own_.erase(std::remove_if(own_.begin(), own_.end(), [](const OwnIsland& o) { return o.contacts; }), own_.end());
     solved += on_field;
     on_field = 0;

@@ -48,8 +48,9 @@ class IslandStepper {
   /// it does not, lone bodies are stepped without first replaying QuickStep's order of telling.
   void SetMoveOrderMatters(bool matters) { move_order_matters_ = matters; }
   /// The log of the contacts with the static world the kernel's collision made (null: none):
-  /// the bodies touching only those are stepped by ContactIslandStepper.
-  void SetStaticContacts(const StaticContactLog* log) { static_contacts_ = log; }
+  /// the bodies touching only those are stepped by ContactIslandStepper; the contacts of every
+  /// other body it steps are made ODE joints first.
+  void SetStaticContacts(StaticContactLog* log) { static_contacts_ = log; }
 
   /// One physics step of `world` (whose every body is in `bodies`) by `dt` seconds; `balls` are
   /// the balls' bodies. Bodies disabled before the step stay disabled. Lone bodies are stepped
@@ -98,7 +99,7 @@ class IslandStepper {
   dVector3 gravity_ = {};              // the world's, read once a step
   LoneBodyStepper lone_stepper_;
   ContactIslandStepper contact_stepper_;
-  const StaticContactLog* static_contacts_ = nullptr;
+  StaticContactLog* static_contacts_ = nullptr;
   ContactSolverSettings settings_;     // the world's, read in a pass with static-contact islands
   struct OwnIsland {
     dBodyID body;

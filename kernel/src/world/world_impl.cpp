@@ -210,6 +210,9 @@ void WorldImpl::Build() {
                                                   ph.max_contacts);
   const Broadphase broadphase = collision_->broadphase();
   islands_.SetMoveOrderMatters(broadphase == Broadphase::kSweepAndPrune || broadphase == Broadphase::kHash);
+  // A body touching only the field keeps its contacts out of ODE: the islands' stepper steps
+  // it, or makes them joints for QuickStep.
+  collision_->StaticContacts().KeepStaticContacts(true);
   islands_.SetStaticContacts(&collision_->StaticContacts());
   for (const MaterialPair& p : model_.material_pairs) {
     collision_->materials().SetPair(p.a, p.b, p.surface);

@@ -153,11 +153,11 @@ dSurfaceParameters Surface(int index, int step, const dReal* axis, dReal* fdir1)
 }
 
 // Makes the contacts of two geometries in both worlds (found in the kernel's world: the bodies
-// are where the other world's are) and logs the kernel's: a null body is the static world.
+// are where the other world's are), the kernel's through its log: a null body is the static world.
 struct Contacts {
-  dWorldID kernel_world, ode_world;
-  dJointGroupID kernel_group, ode_group;
-  StaticContactLog& log;
+  dWorldID ode_world;
+  dJointGroupID ode_group;
+  StaticContactLog& log;  // makes the kernel's
   void Make(dGeomID a, dGeomID b, dBodyID ka, dBodyID kb, dBodyID oa, dBodyID ob, const dReal* axis, int kind,
             int step) {
     std::array<dContactGeom, 8> hits{};
@@ -166,11 +166,8 @@ struct Contacts {
       dContact c{};
       c.geom = hits[static_cast<std::size_t>(h)];
       c.surface = Surface(kind, step, axis, c.fdir1);
-      dJointID kj = dJointCreateContact(kernel_world, kernel_group, &c);
-      dJointID oj = dJointCreateContact(ode_world, ode_group, &c);
-      dJointAttach(kj, ka, kb);
-      dJointAttach(oj, oa, ob);
-      if (!ka != !kb) log.Record(kj, c, !ka);  // the log keeps contacts with the static world
+      log.Make(c, ka, kb);
+      dJointAttach(dJointCreateContact(ode_world, ode_group, &c), oa, ob);
     }
   }
 };
@@ -224,7 +221,9 @@ TEST(ContactIslandStepper, EndsEveryStepBitForBitWhereQuickStepPutsTheBody) {
   dVector3 gravity;
   dWorldGetGravity(kernel_world.get(), gravity);
   StaticContactLog log;
-  Contacts contacts{kernel_world.get(), ode_world.get(), kernel_contacts.get(), ode_contacts.get(), log};
+  log.Bind(kernel_world.get(), kernel_contacts.get());
+  log.KeepStaticContacts(true);
+  Contacts contacts{ode_world.get(), ode_contacts.get(), log};
   ContactIslandStepper stepper;
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int islands = 0;
@@ -329,7 +328,9 @@ TEST(ContactIslandStepper, BesideQuickStepsIslandsEveryBodyEndsEveryStepWhereQui
   std::vector<dBodyID> bodies;
   for (auto it = twins.rbegin(); it != twins.rend(); ++it) bodies.push_back(it->kernel);
   StaticContactLog log;
-  Contacts contacts{kernel_world.get(), ode_world.get(), kernel_contacts.get(), ode_contacts.get(), log};
+  log.Bind(kernel_world.get(), kernel_contacts.get());
+  log.KeepStaticContacts(true);
+  Contacts contacts{ode_world.get(), ode_contacts.get(), log};
   IslandStepper islands;
   islands.SetStaticContacts(&log);
   islands.SetMoveOrderMatters(false);
@@ -382,54 +383,59 @@ TEST(IsStaticContactIsland, LeavesToQuickStepWhatTheStepperDoesNotReproduce) {
   OdeWorld world = MakeWorld();
   OdeJointGroup contacts(dJointGroupCreate(0));
   StaticContactLog log;
+  log.Bind(world.get(), contacts.get());
+  log.KeepStaticContacts(true);
   auto body = [&] { return ubersim::test::MakeBall(world.get()); };
-  auto touch_floor = [&](dBodyID b, bool logged) {
-    dContact c{};
-    c.geom.normal[2] = 1;
-    c.surface.mode = dContactApprox1;
-    c.surface.mu = 1;
-    dJointID j = dJointCreateContact(world.get(), contacts.get(), &c);
-    dJointAttach(j, b, nullptr);
-    if (logged) log.Record(j, c, false);
-    return j;
-  };
+  dContact c{};
+  c.geom.normal[2] = 1;
+  c.surface.mode = dContactApprox1;
+  c.surface.mu = 1;
+  auto touch_floor = [&](dBodyID b) { log.Make(c, b, nullptr); };
+
   dBodyID on_floor = body();
-  touch_floor(on_floor, true);
-  touch_floor(on_floor, true);
+  touch_floor(on_floor);
+  touch_floor(on_floor);
   EXPECT_TRUE(IsStaticContactIsland(on_floor, log));
+  EXPECT_EQ(dBodyGetJoint(on_floor, 0), nullptr) << "its contacts are not ODE joints";
   EXPECT_FALSE(IsStaticContactIsland(body(), log)) << "no contact: a lone body's";
 
-  dBodyID unlogged = body();
-  touch_floor(unlogged, true);
-  touch_floor(unlogged, false);
-  EXPECT_FALSE(IsStaticContactIsland(unlogged, log)) << "a contact the log did not keep";
-
   dBodyID pushed = body();
-  touch_floor(pushed, true);
+  touch_floor(pushed);
   dBodyID other = body();
-  dContact c{};
-  c.surface.mode = dContactApprox1;
-  dJointAttach(dJointCreateContact(world.get(), contacts.get(), &c), pushed, other);
+  log.Make(c, pushed, other);
   EXPECT_FALSE(IsStaticContactIsland(pushed, log)) << "a contact with another body";
+  EXPECT_EQ(dBodyGetNumJoints(pushed), 2) << "its contact with the floor made a joint first";
+  EXPECT_EQ(dJointGetBody(dBodyGetJoint(pushed, 1), 1), nullptr) << "the floor's, the older";
+  touch_floor(pushed);
+  EXPECT_EQ(dBodyGetNumJoints(pushed), 3) << "and the ones after it at once";
+
+  dBodyID joined = body();
+  touch_floor(joined);
+  log.Join(joined);
+  EXPECT_FALSE(IsStaticContactIsland(joined, log)) << "made joints for QuickStep";
+  EXPECT_EQ(dBodyGetNumJoints(joined), 1);
 
   dBodyID hinged = body();
-  touch_floor(hinged, true);
+  touch_floor(hinged);
   dJointAttach(dJointCreateHinge(world.get(), nullptr), hinged, nullptr);
   EXPECT_FALSE(IsStaticContactIsland(hinged, log)) << "a joint other than a contact";
 
-  dBodyID off = body();
-  dJointDisable(touch_floor(off, true));
-  EXPECT_FALSE(IsStaticContactIsland(off, log)) << "a disabled contact";
-
   dBodyID damped = body();
-  touch_floor(damped, true);
+  touch_floor(damped);
   dBodySetLinearDamping(damped, 0.1);
   EXPECT_FALSE(IsStaticContactIsland(damped, log)) << "damping: left to ODE";
 
   dBodyID asleep = body();
-  touch_floor(asleep, true);
+  touch_floor(asleep);
   dBodyDisable(asleep);
   EXPECT_FALSE(IsStaticContactIsland(asleep, log)) << "disabled";
+
+  // Not keeping them, the log makes every contact an ODE joint at once (QuickStep alone steps).
+  log.KeepStaticContacts(false);
+  dBodyID plain = body();
+  touch_floor(plain);
+  EXPECT_EQ(dBodyGetNumJoints(plain), 1);
+  EXPECT_FALSE(IsStaticContactIsland(plain, log));
 }
 
 }  // namespace
