@@ -203,51 +203,84 @@ void MakeContacts(const std::vector<Twin>& twins, const std::vector<std::pair<in
   }
 }
 
-TEST(ContactIslandStepper, EndsEveryStepBitForBitWhereQuickStepPutsTheBody) {
-  OdeLibrary ode;
-  OdeWorld kernel_world = MakeWorld(), ode_world = MakeWorld();
-  OdeSpace kernel_space(dSimpleSpaceCreate(nullptr)), ode_space(dSimpleSpaceCreate(nullptr));
-  dGeomID kernel_floor = dCreatePlane(kernel_space.get(), 0, 0, 1, 0);
-  dCreatePlane(ode_space.get(), 0, 0, 1, 0);
-  OdeJointGroup kernel_contacts(dJointGroupCreate(0)), ode_contacts(dJointGroupCreate(0));
-  std::mt19937_64 rng(20261202);
-  std::vector<Twin> twins;
-  for (int i = 0; i < 24; ++i) {
-    twins.push_back(
-        MakeTwin(kernel_world.get(), kernel_space.get(), ode_world.get(), ode_space.get(), rng, i, Placement{i % 2 == 0}));
+// Two worlds with a floor: the kernel's, stepped by the kernel's steppers, and its twin,
+// stepped by QuickStep; the bodies made in both, the contacts made in both.
+class TwinWorlds : public ::testing::Test {
+ protected:
+  TwinWorlds() {
+    kernel_floor_ = dCreatePlane(kernel_space_.get(), 0, 0, 1, 0);
+    dCreatePlane(ode_space_.get(), 0, 0, 1, 0);
+    log_.Bind(kernel_world_.get(), kernel_contacts_.get());
+    log_.KeepStaticContacts(true);
   }
-  const ContactSolverSettings settings = ContactSolverSettings::Of(kernel_world.get());
-  EXPECT_EQ(settings.sor_w, 1.2);
-  dVector3 gravity;
-  dWorldGetGravity(kernel_world.get(), gravity);
-  StaticContactLog log;
-  log.Bind(kernel_world.get(), kernel_contacts.get());
-  log.KeepStaticContacts(true);
-  Contacts contacts{ode_world.get(), ode_contacts.get(), log};
-  ContactIslandStepper stepper;
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  int islands = 0;
-  for (int step = 0; step < 450; ++step) {
-    // Four sweeps as a robot's island, ten as the ball's at the fast profile (QuickStep shuffles
-    // its rows before the ninth), twenty as at the precise one.
-    const int iterations = std::array{4, 10, 20}[static_cast<std::size_t>(step / 10) % 3];
-    for (const Twin& t : twins) {
-      if (step % 4 == 0) continue;  // no push on some steps: the zero path too
-      const std::array<double, 6> push = {5 * u(rng), 5 * u(rng), 2 * u(rng), 0.1 * u(rng), 0.1 * u(rng), 0.2 * u(rng)};
-      for (dBodyID b : {t.kernel, t.ode}) {
+  int Add(const Placement& where) {
+    const int index = static_cast<int>(twins_.size());
+    twins_.push_back(
+        MakeTwin(kernel_world_.get(), kernel_space_.get(), ode_world_.get(), ode_space_.get(), rng_, index, where));
+    return index;
+  }
+  // The pushes a drive adds before a step, on the first `count` bodies (none on some steps: the
+  // zero path too).
+  void Push(std::size_t count, int step) {
+    if (step % 4 == 0) return;
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::array<double, 6> push = {5 * u_(rng_), 5 * u_(rng_), 2 * u_(rng_), 0.1 * u_(rng_), 0.1 * u_(rng_), 0.2 * u_(rng_)};
+      for (dBodyID b : {twins_[i].kernel, twins_[i].ode}) {
         dBodyAddForce(b, push[0], push[1], push[2]);
         dBodyAddTorque(b, push[3], push[4], push[5]);
       }
     }
-    MakeContacts(twins, {}, step, kernel_floor, contacts);
+  }
+  // QuickStep steps the twin from the generator's `seed`, which must end where the kernel's step
+  // left it (`kernel_seed`); then the contacts go and every body is compared.
+  void StepTwinAndCompare(unsigned long seed, unsigned long kernel_seed, int iterations, int step) {
+    dRandSetSeed(seed);
+    dWorldSetQuickStepNumIterations(ode_world_.get(), iterations);
+    dWorldQuickStep(ode_world_.get(), kStep);
+    ASSERT_EQ(kernel_seed, dRandGetSeed()) << "the same draws from ODE's generator, step " << step;
+    dJointGroupEmpty(kernel_contacts_.get());
+    dJointGroupEmpty(ode_contacts_.get());
+    log_.Clear();
+    for (std::size_t i = 0; i < twins_.size(); ++i) {
+      ASSERT_EQ(StateDifference(twins_[i].kernel, twins_[i].ode), "") << "body " << i << ", step " << step;
+    }
+  }
+  // Four sweeps as a robot's island, ten as the ball's at the fast profile (QuickStep shuffles
+  // its rows before the ninth), twenty as at the precise one.
+  static int Iterations(int step) { return std::array{4, 10, 20}[static_cast<std::size_t>(step / 10) % 3]; }
+
+  OdeLibrary ode_;
+  OdeWorld kernel_world_ = MakeWorld(), ode_world_ = MakeWorld();
+  OdeSpace kernel_space_{dSimpleSpaceCreate(nullptr)}, ode_space_{dSimpleSpaceCreate(nullptr)};
+  OdeJointGroup kernel_contacts_{dJointGroupCreate(0)}, ode_contacts_{dJointGroupCreate(0)};
+  dGeomID kernel_floor_ = nullptr;
+  StaticContactLog log_;
+  Contacts contacts_{ode_world_.get(), ode_contacts_.get(), log_};
+  std::mt19937_64 rng_{20261202};
+  std::uniform_real_distribution<double> u_{-1.0, 1.0};
+  std::vector<Twin> twins_;
+};
+
+TEST_F(TwinWorlds, EveryBodyOnTheFloorEndsEveryStepBitForBitWhereQuickStepPutsIt) {
+  for (int i = 0; i < 24; ++i) Add(Placement{i % 2 == 0});
+  const ContactSolverSettings settings = ContactSolverSettings::Of(kernel_world_.get());
+  EXPECT_EQ(settings.sor_w, 1.2);
+  dVector3 gravity;
+  dWorldGetGravity(kernel_world_.get(), gravity);
+  ContactIslandStepper stepper;
+  int islands = 0;
+  for (int step = 0; step < 450; ++step) {
+    const int iterations = Iterations(step);
+    Push(twins_.size(), step);
+    MakeContacts(twins_, {}, step, kernel_floor_, contacts_);
     // ODE's island order: its body list, newest first. Bodies off the floor are QuickStep's lone
     // islands: the kernel steps them through QuickStep too, in a world of their own here.
     const unsigned long seed = 1000 + static_cast<unsigned long>(step);
     dRandSetSeed(seed);
     std::vector<dBodyID> airborne;
-    for (auto it = twins.rbegin(); it != twins.rend(); ++it) {
-      if (IsStaticContactIsland(it->kernel, log)) {
-        stepper.Step(it->kernel, log, gravity, settings, iterations, kStep);
+    for (auto it = twins_.rbegin(); it != twins_.rend(); ++it) {
+      if (IsStaticContactIsland(it->kernel, log_)) {
+        stepper.Step(it->kernel, log_, gravity, settings, iterations, kStep);
         ++islands;
       } else {
         ASSERT_EQ(dBodyGetJoint(it->kernel, 0), nullptr) << "only contacts with the floor here";
@@ -256,127 +289,82 @@ TEST(ContactIslandStepper, EndsEveryStepBitForBitWhereQuickStepPutsTheBody) {
     }
     const unsigned long kernel_seed = dRandGetSeed();
     // The airborne ones: QuickStep alone, every stepped body disabled for it.
-    for (const Twin& t : twins) {
+    for (const Twin& t : twins_) {
       if (std::find(airborne.begin(), airborne.end(), t.kernel) == airborne.end()) dBodyDisable(t.kernel);
     }
-    dWorldSetQuickStepNumIterations(kernel_world.get(), iterations);
-    dWorldQuickStep(kernel_world.get(), kStep);  // draws nothing: no constraints
-    for (const Twin& t : twins) dBodyEnable(t.kernel);
+    dWorldSetQuickStepNumIterations(kernel_world_.get(), iterations);
+    dWorldQuickStep(kernel_world_.get(), kStep);  // draws nothing: no constraints
+    for (const Twin& t : twins_) dBodyEnable(t.kernel);
 
-    dRandSetSeed(seed);
-    dWorldSetQuickStepNumIterations(ode_world.get(), iterations);
-    dWorldQuickStep(ode_world.get(), kStep);
-    ASSERT_EQ(kernel_seed, dRandGetSeed()) << "the same draws from ODE's generator, step " << step;
-    dJointGroupEmpty(kernel_contacts.get());
-    dJointGroupEmpty(ode_contacts.get());
-    log.Clear();
-    for (std::size_t i = 0; i < twins.size(); ++i) {
-      ASSERT_EQ(StateDifference(twins[i].kernel, twins[i].ode), "") << "body " << i << ", step " << step;
-    }
+    StepTwinAndCompare(seed, kernel_seed, iterations, step);
+    if (HasFatalFailure()) return;
   }
   // The comparison compared what it is for: most bodies were on the floor most steps, and the
   // boxes still stand on it (the contacts held them up).
   EXPECT_GT(islands, 450 * 24 / 2);
-  for (std::size_t i = 1; i < twins.size(); i += 2) {
-    EXPECT_NEAR(dBodyGetPosition(twins[i].kernel)[2], 0.07, 0.01) << "box " << i;
+  for (std::size_t i = 1; i < twins_.size(); i += 2) {
+    EXPECT_NEAR(dBodyGetPosition(twins_[i].kernel)[2], 0.07, 0.01) << "box " << i;
   }
 }
 
 // Through IslandStepper, beside islands QuickStep keeps: boxes stacked and a ball against a box
 // (contacts between bodies), a box on a hinge, a damped ball.
-TEST(ContactIslandStepper, BesideQuickStepsIslandsEveryBodyEndsEveryStepWhereQuickStepPutsIt) {
-  OdeLibrary ode;
-  OdeWorld kernel_world = MakeWorld(), ode_world = MakeWorld();
-  OdeSpace kernel_space(dSimpleSpaceCreate(nullptr)), ode_space(dSimpleSpaceCreate(nullptr));
-  dGeomID kernel_floor = dCreatePlane(kernel_space.get(), 0, 0, 1, 0);
-  dCreatePlane(ode_space.get(), 0, 0, 1, 0);
-  OdeJointGroup kernel_contacts(dJointGroupCreate(0)), ode_contacts(dJointGroupCreate(0));
-  std::mt19937_64 rng(20261202);
-  std::vector<Twin> twins;
+TEST_F(TwinWorlds, BesideQuickStepsIslandsEveryBodyEndsEveryStepWhereQuickStepPutsIt) {
+  for (int i = 0; i < 16; ++i) Add(Placement{i % 2 == 0});  // alone on the floor
   std::vector<std::pair<int, int>> pairs;
-  auto add = [&](const Placement& where) {
-    const int index = static_cast<int>(twins.size());
-    twins.push_back(MakeTwin(kernel_world.get(), kernel_space.get(), ode_world.get(), ode_space.get(), rng, index,
-                             where));
-    return index;
-  };
-  for (int i = 0; i < 16; ++i) add(Placement{i % 2 == 0});  // alone on the floor
   for (int k = 0; k < 3; ++k) {
     // A box on a box (their contacts link two bodies), and a ball against a box's side.
     const double x = -2.5 + 2.0 * k, y = 2.5;
-    const int bottom = add(Placement{false, true, {x, y, 0.0695}});
-    const int top = add(Placement{false, true, {x + 0.03, y, 0.2085}});
+    const int bottom = Add(Placement{false, true, {x, y, 0.0695}});
+    const int top = Add(Placement{false, true, {x + 0.03, y, 0.2085}});
     pairs.emplace_back(top, bottom);
-    const int box = add(Placement{false, true, {x, -2.5, 0.0695}});
-    const int ball = add(Placement{true, true, {x + 0.111, -2.5, 0.0213}});
+    const int box = Add(Placement{false, true, {x, -2.5, 0.0695}});
+    const int ball = Add(Placement{true, true, {x + 0.111, -2.5, 0.0213}});
     pairs.emplace_back(ball, box);
   }
   // A box hinged to the world and a damped ball: islands the kernel leaves to QuickStep.
-  const int hinged = add(Placement{false, true, {2.5, 0, 0.0695}});
-  const int damped = add(Placement{true, true, {2.5, 1, 0.0213}});
-  for (auto [w, b] : {std::pair{kernel_world.get(), twins[static_cast<std::size_t>(hinged)].kernel},
-                      std::pair{ode_world.get(), twins[static_cast<std::size_t>(hinged)].ode}}) {
+  const Twin& hinged = twins_[static_cast<std::size_t>(Add(Placement{false, true, {2.5, 0, 0.0695}}))];
+  for (auto [w, b] : {std::pair{kernel_world_.get(), hinged.kernel}, std::pair{ode_world_.get(), hinged.ode}}) {
     dJointID h = dJointCreateHinge(w, nullptr);
     dJointAttach(h, b, nullptr);
     dJointSetHingeAnchor(h, 2.5, 0, 0.0695);
     dJointSetHingeAxis(h, 0, 0, 1);
   }
-  dBodySetLinearDamping(twins[static_cast<std::size_t>(damped)].kernel, 0.05);
-  dBodySetLinearDamping(twins[static_cast<std::size_t>(damped)].ode, 0.05);
+  const Twin& damped = twins_[static_cast<std::size_t>(Add(Placement{true, true, {2.5, 1, 0.0213}}))];
+  dBodySetLinearDamping(damped.kernel, 0.05);
+  dBodySetLinearDamping(damped.ode, 0.05);
 
   // ODE's body list: newest first.
   std::vector<dBodyID> bodies;
-  for (auto it = twins.rbegin(); it != twins.rend(); ++it) bodies.push_back(it->kernel);
-  StaticContactLog log;
-  log.Bind(kernel_world.get(), kernel_contacts.get());
-  log.KeepStaticContacts(true);
-  Contacts contacts{ode_world.get(), ode_contacts.get(), log};
+  for (auto it = twins_.rbegin(); it != twins_.rend(); ++it) bodies.push_back(it->kernel);
   IslandStepper islands;
-  islands.SetStaticContacts(&log);
+  islands.SetStaticContacts(&log_);
   islands.SetMoveOrderMatters(false);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   int linked = 0;  // contacts between two bodies made
   for (int step = 0; step < 450; ++step) {
-    // Four sweeps as a robot's island, ten as the ball's at the fast profile (QuickStep shuffles
-    // its rows before the ninth), twenty as at the precise one.
-    const int iterations = std::array{4, 10, 20}[static_cast<std::size_t>(step / 10) % 3];
-    for (std::size_t i = 0; i < 16; ++i) {  // the bodies alone; the others stay where they touch
-      const Twin& t = twins[i];
-      if (step % 4 == 0) continue;  // no push on some steps: the zero path too
-      const std::array<double, 6> push = {5 * u(rng), 5 * u(rng), 2 * u(rng), 0.1 * u(rng), 0.1 * u(rng), 0.2 * u(rng)};
-      for (dBodyID b : {t.kernel, t.ode}) {
-        dBodyAddForce(b, push[0], push[1], push[2]);
-        dBodyAddTorque(b, push[3], push[4], push[5]);
-      }
-    }
-    MakeContacts(twins, pairs, step, kernel_floor, contacts);
+    const int iterations = Iterations(step);
+    Push(16, step);  // the bodies alone; the others stay where they touch
+    MakeContacts(twins_, pairs, step, kernel_floor_, contacts_);
     for (const auto& [i, j] : pairs) {
-      if (dAreConnected(twins[static_cast<std::size_t>(i)].kernel, twins[static_cast<std::size_t>(j)].kernel)) ++linked;
+      if (dAreConnected(twins_[static_cast<std::size_t>(i)].kernel, twins_[static_cast<std::size_t>(j)].kernel)) {
+        ++linked;
+      }
     }
     const unsigned long seed = 1000 + static_cast<unsigned long>(step);
     dRandSetSeed(seed);
     islands.SetIterations(iterations, iterations);
-    islands.Step(kernel_world.get(), bodies, {}, kStep);
+    islands.Step(kernel_world_.get(), bodies, {}, kStep);
     const unsigned long kernel_seed = dRandGetSeed();
-    dRandSetSeed(seed);
-    dWorldSetQuickStepNumIterations(ode_world.get(), iterations);
-    dWorldQuickStep(ode_world.get(), kStep);
-    ASSERT_EQ(kernel_seed, dRandGetSeed()) << "the same draws from ODE's generator, step " << step;
-    dJointGroupEmpty(kernel_contacts.get());
-    dJointGroupEmpty(ode_contacts.get());
-    log.Clear();
-    for (std::size_t i = 0; i < twins.size(); ++i) {
-      ASSERT_EQ(StateDifference(twins[i].kernel, twins[i].ode), "") << "body " << i << ", step " << step;
-    }
+    StepTwinAndCompare(seed, kernel_seed, iterations, step);
+    if (HasFatalFailure()) return;
   }
   // The comparison compared what it is for: bodies touched each other in many steps, and the
   // boxes alone still stand on the floor (the contacts held them up).
   EXPECT_GT(linked, 600);  // of 2700 pair-steps: stacks topple, balls roll off
   for (std::size_t i = 1; i < 16; i += 2) {
-    EXPECT_NEAR(dBodyGetPosition(twins[i].kernel)[2], 0.07, 0.01) << "box " << i;
+    EXPECT_NEAR(dBodyGetPosition(twins_[i].kernel)[2], 0.07, 0.01) << "box " << i;
   }
 }
-
 
 TEST(IsStaticContactIsland, LeavesToQuickStepWhatTheStepperDoesNotReproduce) {
   OdeLibrary ode;
