@@ -862,6 +862,9 @@ return {connected: !!(v && v.connected), replay: s && s.status ? s.status.replay
         return cls.driver.execute_script(cls.REPLAY_JS)
 
     def test_the_slider_seeks_and_the_controls_reach_the_replay(self):
+        # Each answer is a round trip through the replaying simulator; on a loaded machine (the
+        # sanitizer build, two suites' worth of work on two cores) 5 s was seen to run out.
+        patience = 15.0
         try:
             displayed = lambda element_id: self.driver.find_element(By.ID, element_id).is_displayed()  # noqa: E731
             self.assertTrue(displayed("replay-bar"))
@@ -877,9 +880,10 @@ return {connected: !!(v && v.connected), replay: s && s.status ? s.status.replay
             # played out before this test began: its button then starts it again first.
             if not p["replay"]["playing"]:
                 self.driver.find_element(By.ID, "replay-play").click()
-                harness.wait_for(lambda: self.page()["replay"]["playing"] or None, 5.0, what="the replay playing again")
+                harness.wait_for(lambda: self.page()["replay"]["playing"] or None, patience,
+                                 what="the replay playing again")
             self.driver.find_element(By.ID, "replay-play").click()
-            p = harness.wait_for(lambda: (lambda r: r if not r["replay"]["playing"] else None)(self.page()), 5.0,
+            p = harness.wait_for(lambda: (lambda r: r if not r["replay"]["playing"] else None)(self.page()), patience,
                                  what="the replay paused")
             self.assertEqual(p["play"], "Play")
 
@@ -893,7 +897,7 @@ return {connected: !!(v && v.connected), replay: s && s.status ? s.status.replay
             actions.perform()
             p = harness.wait_for(lambda: (lambda r: r if abs(r["replay"]["t"] - r["slider"]) < 1e-3
                                           and r["slider"] > 0.6 * duration else None)(self.page()),
-                                 5.0, what="the replay at the slider's time")
+                                 patience, what="the replay at the slider's time")
             self.assertLess(p["slider"], 0.9 * duration)
             self.assertFalse(p["replay"]["playing"], "a seek keeps it paused")
             self.assertAlmostEqual(p["t"], p["replay"]["t"], delta=1e-3)
@@ -902,9 +906,9 @@ return {connected: !!(v && v.connected), replay: s && s.status ? s.status.replay
             # The speed select and the space key.
             self.driver.execute_script("""const s = document.getElementById('replay-speed');
                 s.value = '4'; s.dispatchEvent(new Event('change'));""")
-            harness.wait_for(lambda: self.page()["replay"]["speed"] == 4, 5.0, what="speed 4 on the replay")
+            harness.wait_for(lambda: self.page()["replay"]["speed"] == 4, patience, what="speed 4 on the replay")
             self.driver.find_element(By.TAG_NAME, "body").send_keys(" ")
-            harness.wait_for(lambda: self.page()["replay"]["playing"], 5.0, what="playing after the space key")
+            harness.wait_for(lambda: self.page()["replay"]["playing"], patience, what="playing after the space key")
             path = os.path.join(output_directory(), "viewer-replay.png")
             self.assertTrue(self.driver.save_screenshot(path))
             print(f"\nreplay page: {self.page()}; screenshot {path}")
