@@ -176,14 +176,10 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   }
   if (on_field > 0 && solved > 0 && iterations >= ContactIslandStepper::kFirstShuffle) {
     // QuickStep shuffles an island's rows with ODE's generator from its ninth sweep on, island
-    // after island in its own order: the kernel's islands drawing before or after all of its
-    // islands would change every draw. Such a pass leaves them to QuickStep.
-    for (const OwnIsland& o : own_) {
-      if (o.contacts) static_contacts_->Join(o.body);
-    }
-    own_.erase(std::remove_if(own_.begin(), own_.end(), [](const OwnIsland& o) { return o.contacts; }), own_.end());
-    solved += on_field;
-    on_field = 0;
+    // after island in its own order: the kernel's islands must draw between QuickStep's where
+    // QuickStep would have stepped them.
+    InterleavedPass(world, bodies, pass, iterations, dt);
+    return;
   }
   if (move_order_matters_ && solved > 0 && !own_.empty()) {
     // QuickStep would have moved the kernel's bodies between its other islands: the broadphase
@@ -221,6 +217,76 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   for (dBodyID b : held_) {
     if (!dBodyIsEnabled(b)) dBodyEnable(b);
   }
+}
+
+void IslandStepper::InterleavedPass(dWorldID world, const std::vector<dBodyID>& bodies, int pass, int iterations,
+                                    double dt) {
+  // Every body the kernel steps is touched first in QuickStep's order, as in Pass.
+  if (move_order_matters_) TouchInQuickStepOrder(bodies, pass);
+  settings_ = ContactSolverSettings::Of(world);
+  const auto own_island = [this](dBodyID b) -> const OwnIsland* {
+    for (const OwnIsland& o : own_) {
+      if (o.body == b) return &o;
+    }
+    return nullptr;
+  };
+  // Lone bodies draw nothing from the generator: stepped first.
+  for (const OwnIsland& o : own_) {
+    if (!o.contacts) lone_stepper_.Step(o.body, gravity_, dt);
+  }
+  // QuickStep's islands in its order (its search, as TouchInQuickStepOrder's), gathered into
+  // one QuickStep call until a static-contact island comes, which the kernel steps between.
+  segment_.clear();
+  reached_.clear();
+  const auto flush = [&] {
+    if (segment_.empty()) return;
+    const auto in_segment = [this](dBodyID b) {
+      return std::find(segment_.begin(), segment_.end(), b) != segment_.end();
+    };
+    walk_.clear();  // the bodies this call leaves out
+    for (dBodyID b : bodies) {
+      if (dBodyIsEnabled(b) && !in_segment(b)) {
+        dBodyDisable(b);
+        walk_.push_back(b);
+      }
+    }
+    for (dBodyID b : held_) {
+      if (in_segment(b)) dBodyDisable(b);  // its root's search reaches it
+    }
+    dWorldSetQuickStepNumIterations(world, iterations);
+    dWorldQuickStep(world, dt);
+    for (dBodyID b : walk_) dBodyEnable(b);
+    for (dBodyID b : held_) {
+      if (!dBodyIsEnabled(b)) dBodyEnable(b);
+    }
+    walk_.clear();
+    segment_.clear();
+  };
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    dBodyID b = bodies[i];
+    if (!dBodyIsEnabled(b) || !InPass(i, pass) || IsLimb(i)) continue;
+    if (std::find(reached_.begin(), reached_.end(), b) != reached_.end()) continue;
+    reached_.push_back(b);
+    if (const OwnIsland* o = own_island(b)) {
+      if (o->contacts) {
+        flush();
+        contact_stepper_.Step(b, *static_contacts_, gravity_, settings_, iterations, dt);
+      }
+      continue;
+    }
+    // A QuickStep island: every body its search reaches.
+    const std::size_t first = segment_.size();
+    segment_.push_back(b);
+    for (std::size_t next = first; next < segment_.size(); ++next) {
+      ForEachLinkedBody(segment_[next], [this](dBodyID other) {
+        if (std::find(reached_.begin(), reached_.end(), other) == reached_.end()) {
+          reached_.push_back(other);
+          segment_.push_back(other);
+        }
+      });
+    }
+  }
+  flush();
 }
 
 void IslandStepper::TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, int pass) {

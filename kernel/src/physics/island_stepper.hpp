@@ -89,6 +89,10 @@ class IslandStepper {
   bool InPass(std::size_t index, int pass) const;
   // Whether the index-th body of Step's list is a limb (see Step).
   bool IsLimb(std::size_t index) const { return limbs_ && (*limbs_)[index]; }
+  // A pass of `iterations` >= ContactIslandStepper::kFirstShuffle with both static-contact
+  // islands and QuickStep's: QuickStep called for each run of its islands between the kernel's,
+  // in its island order, so that every island draws from ODE's generator where it would have.
+  void InterleavedPass(dWorldID world, const std::vector<dBodyID>& bodies, int pass, int iterations, double dt);
   // Tells the geometries of every body of the pass that it moved, in the order QuickStep would
   // step them all (its island search), without moving any.
   void TouchInQuickStepOrder(const std::vector<dBodyID>& bodies, int pass);
@@ -115,6 +119,7 @@ class IslandStepper {
   std::vector<dBodyID> walk_;          // TouchInQuickStepOrder's stack
   std::vector<dBodyID> reached_;       // and the bodies its walk has reached
   std::vector<dBodyID> held_;          // limbs disabled for QuickStep's search to reach them
+  std::vector<dBodyID> segment_;       // InterleavedPass's bodies for its next QuickStep call
   const std::vector<char>* limbs_ = nullptr;  // Step's flags while it runs; none if not one per body
 };
 
