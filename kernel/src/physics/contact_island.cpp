@@ -82,12 +82,8 @@ StaticContactLog::BodyContacts& StaticContactLog::Of(dBodyID body) {
 }
 
 void StaticContactLog::MakeJoint(const StaticContact& c) {
-  dJointID j = dJointCreateContact(world_, group_, &c.contact);
-  if (c.reversed) {
-    dJointAttach(j, nullptr, c.body);
-  } else {
-    dJointAttach(j, c.body, nullptr);
-  }
+  dJointAttach(dJointCreateContact(world_, group_, &c.contact), c.reversed ? nullptr : c.body,
+               c.reversed ? c.body : nullptr);
 }
 
 void StaticContactLog::Make(const dContact& contact, dBodyID a, dBodyID b) {
@@ -110,13 +106,9 @@ void StaticContactLog::Join(dBodyID body) {
   BodyContacts& owner = Of(body);
   if (owner.joined) return;
   owner.joined = true;
-  // Oldest first: walk back from the newest, then make them forward.
-  int count = 0;
-  for (int i = owner.newest; i >= 0; i = contacts_[static_cast<std::size_t>(i)].previous) ++count;
-  for (int k = count - 1; k >= 0; --k) {
-    int i = owner.newest;
-    for (int step = 0; step < k; ++step) i = contacts_[static_cast<std::size_t>(i)].previous;
-    MakeJoint(contacts_[static_cast<std::size_t>(i)]);
+  // Oldest first: the log holds every body's contacts in the order they came.
+  for (int i = 0; i <= owner.newest; ++i) {
+    if (contacts_[static_cast<std::size_t>(i)].body == body) MakeJoint(contacts_[static_cast<std::size_t>(i)]);
   }
 }
 
