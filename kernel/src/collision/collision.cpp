@@ -167,7 +167,18 @@ int CollideSphereAndPlane(dGeomID first, dGeomID second, dContactGeom& c) {
   const dGeomID sphere = sphere_first ? first : second;
   dVector4 p;
   dGeomPlaneGetParams(sphere_first ? second : first, p);
-  const dReal* centre = dGeomGetPosition(sphere);
+  // The centre from the body's pose as ODE's computePosr finds it (the same operations), without
+  // the rotation it would multiply out too: only the carpet asks for a wheel sphere's pose.
+  dVector3 centre;
+  const dBodyID body = dGeomGetBody(sphere);
+  if (body && dGeomIsOffset(sphere)) {
+    dMultiply0_331(centre, dBodyGetRotation(body), dGeomGetOffsetPosition(sphere));
+    const dReal* origin = dBodyGetPosition(body);
+    for (int i = 0; i < 3; ++i) centre[i] += origin[i];
+  } else {
+    const dReal* at = dGeomGetPosition(sphere);
+    for (int i = 0; i < 3; ++i) centre[i] = at[i];
+  }
   const dReal radius = dGeomSphereGetRadius(sphere);
   const dReal k = centre[0] * p[0] + centre[1] * p[1] + centre[2] * p[2];
   const dReal depth = p[3] - k + radius;
@@ -268,6 +279,7 @@ void CollisionManager::Refile() {
   hull_slack_.clear();
   hull_touching_.clear();
   surfaces_.clear();
+  ++surfaces_epoch_;
   ball_touching_.clear();
 }
 
@@ -338,7 +350,11 @@ bool InScope(const GeomImpl& g, const GeomImpl& other) {
 }  // namespace
 
 bool CollisionManager::MayCollide(const GeomImpl& a, const GeomImpl& b) {
-  if (&a == &b || !a.collides() || !b.collides()) return false;
+  return a.collides() && b.collides() && MayEverCollide(a, b);
+}
+
+bool CollisionManager::MayEverCollide(const GeomImpl& a, const GeomImpl& b) {
+  if (&a == &b) return false;
   if (!InScope(a, b) || !InScope(b, a)) return false;
   if (!a.body() && !b.body()) return false;  // two static geometries never move apart
   if (a.body() == b.body()) return false;
@@ -502,6 +518,15 @@ void CollisionManager::GroupForField() {
       known->second = std::max(known->second, reach);
     }
   }
+  // Each group's geometries that may ever meet each plane (a wheel's tyre, scoped away from
+  // planes, never does), plane by plane, each plane's in the group's order.
+  for (FieldGroup& group : field_groups_) {
+    for (std::size_t p = 0; p < field_planes_.size(); ++p) {
+      for (std::size_t i = 0; i < group.geoms.size(); ++i) {
+        if (MayEverCollide(*group.geoms[i].geom, *field_planes_[p].geom)) group.on_planes.emplace_back(p, i);
+      }
+    }
+  }
   field_order_.resize(field_groups_.size());
   for (std::size_t i = 0; i < field_order_.size(); ++i) field_order_[i] = i;
   field_grouped_ = true;
@@ -565,11 +590,15 @@ void CollisionManager::ForEachFieldPair(F& f) {
     }
     // A plane's box is infinite: every geometry meets it in the narrow phase (which drops what
     // lies wholly on its free side).
-    for (const FieldPlane& plane : field_planes_) {
-      for (const FieldGeom& b : group.geoms) {
-        if (BodyBoxAbovePlane(b.position, b.rotation, b.centre, b.half, plane.normal, plane.offset)) continue;
-        if (MayCollide(*b.geom, *plane.geom)) f(*b.geom, *plane.geom);
+    // A sphere goes straight to the narrow phase, whose exact test is as cheap as the box's.
+    for (const auto& [p, i] : group.on_planes) {
+      const FieldPlane& plane = field_planes_[p];
+      const FieldGeom& b = group.geoms[i];
+      if (!b.geom->collides() || !plane.geom->collides()) continue;
+      if (!IsSphere(*b.geom) && BodyBoxAbovePlane(b.position, b.rotation, b.centre, b.half, plane.normal, plane.offset)) {
+        continue;
       }
+      f(*b.geom, *plane.geom);
     }
   }
 }
@@ -614,7 +643,11 @@ void CollisionManager::Collide() {
   hull_touching_.clear();
   robots_in_contact_.clear();
   if (++passes_ % kSurfaceCacheSweepPasses == 0) {
-    std::erase_if(surfaces_, [this](const auto& entry) { return entry.second.last_pass + kSurfaceCacheSweepPasses < passes_; });
+    if (std::erase_if(surfaces_, [this](const auto& entry) {
+          return entry.second.last_pass + kSurfaceCacheSweepPasses < passes_;
+        }) > 0) {
+      ++surfaces_epoch_;
+    }
   }
   auto narrow = [this](GeomImpl& a, GeomImpl& b) { Narrow(a, b); };
   ForEachPair(narrow);
@@ -912,12 +945,30 @@ const SurfaceMaterial& CollisionManager::PairSurface(const GeomImpl& a, const Ge
   // A step touches a few hundred pairs; starting afresh when the cache is full costs one
   // resolution per pair and keeps memory flat however long a run is.
   constexpr std::size_t kMaxCachedSurfaces = 4096;
-  if (surfaces_.size() >= kMaxCachedSurfaces && !surfaces_.contains({&a, &b})) surfaces_.clear();
-  auto [it, fresh] = surfaces_.try_emplace({&a, &b});
-  CachedSurface& c = it->second;
-  if (fresh || c.a_version != a.material_version() || c.b_version != b.material_version() ||
-      c.table_version != materials_.version()) {
-    c = CachedSurface{a.material_version(), b.material_version(), materials_.version(),
+  SurfaceMemo* memo = nullptr;
+  if (a.serial() < kMaxMemoSerial) {
+    if (surface_memo_.size() <= a.serial()) surface_memo_.resize(a.serial() + 1);
+    memo = &surface_memo_[a.serial()];
+  }
+  bool fresh = false;
+  CachedSurface* cached = nullptr;
+  if (memo && memo->other == &b && memo->other_serial == b.serial() && memo->epoch == surfaces_epoch_) {
+    cached = memo->cached;
+  } else {
+    if (surfaces_.size() >= kMaxCachedSurfaces && !surfaces_.contains({&a, &b})) {
+      surfaces_.clear();
+      ++surfaces_epoch_;
+    }
+    auto [it, added] = surfaces_.try_emplace({&a, &b});
+    cached = &it->second;  // a node of the map: it stays put until erased
+    fresh = added;
+    if (memo) *memo = SurfaceMemo{&b, b.serial(), cached, surfaces_epoch_};
+  }
+  CachedSurface& c = *cached;
+  // The serials tell a geometry from one made later at a freed one's address.
+  if (fresh || c.a_serial != a.serial() || c.b_serial != b.serial() || c.a_version != a.material_version() ||
+      c.b_version != b.material_version() || c.table_version != materials_.version()) {
+    c = CachedSurface{a.serial(), b.serial(), a.material_version(), b.material_version(), materials_.version(),
                       materials_.Resolve(a.Material(), b.Material())};
   }
   c.last_pass = passes_;

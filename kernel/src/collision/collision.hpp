@@ -171,6 +171,8 @@ class CollisionManager {
 
   /// True when the exclusion rules let a and b collide at all.
   static bool MayCollide(const GeomImpl& a, const GeomImpl& b);
+  /// MayCollide while both take part in collisions: the rules that never change for a pair.
+  static bool MayEverCollide(const GeomImpl& a, const GeomImpl& b);
 
  private:
   void Narrow(GeomImpl& a, GeomImpl& b);
@@ -204,10 +206,24 @@ class CollisionManager {
   const SurfaceMaterial& PairSurface(const GeomImpl& a, const GeomImpl& b);
 
   struct CachedSurface {
+    std::uint64_t a_serial, b_serial;  // GeomImpl::serial
     std::uint64_t a_version, b_version, table_version;
     SurfaceMaterial surface;
     std::uint64_t last_pass = 0;  // the Collide() pass that last used it
   };
+  // The surface a geometry's last pair used, by the geometry's serial: a wheel meets the carpet
+  // step after step, and the memo spares the pair's lookup in surfaces_. Valid while `epoch` is
+  // surfaces_epoch_ (nothing erased from surfaces_ since).
+  struct SurfaceMemo {
+    const GeomImpl* other = nullptr;
+    std::uint64_t other_serial = 0;
+    CachedSurface* cached = nullptr;
+    std::uint64_t epoch = 0;
+  };
+  static constexpr std::uint64_t kMaxMemoSerial = 1 << 16;  // beyond: the lookup alone
+  std::vector<SurfaceMemo> surface_memo_;
+  std::uint64_t surfaces_epoch_ = 1;
+
   struct PairHash {
     std::size_t operator()(const std::pair<const GeomImpl*, const GeomImpl*>& p) const {
       return std::hash<const void*>()(p.first) * 31 + std::hash<const void*>()(p.second);
@@ -227,6 +243,7 @@ class CollisionManager {
   struct FieldGroup {
     std::vector<FieldGeom> geoms;
     std::vector<std::pair<dBodyID, double>> bodies;  // body, reach (m)
+    std::vector<std::pair<std::size_t, std::size_t>> on_planes;  // (plane, geometry) that may meet
     double lo[3], hi[3];                              // this step's box
     bool active = false;                              // any geometry collides
   };

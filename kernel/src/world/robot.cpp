@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "ubersim/error.hpp"
+#include "collision/surface_values.hpp"
 #include "collision/upright_prism.hpp"
 #include "model/urdf.hpp"
 
@@ -80,24 +81,26 @@ class Robot::Context final : public RobotContext {
     }
     // The handler is plugin code running inside the collision manager: a throw or a non-finite
     // surface is this part's fault, and the contact goes on as if the handler had not run.
-    // `before` lives in the closure: assigning into it reuses its name's buffer, where a fresh
-    // copy per contact would allocate (a pair's name is longer than the short-string buffer).
-    g->AddObserver([robot = &robot_, part = &part_, handler = std::move(handler), before = SurfaceMaterial{}](
-                       const Contact& contact, SurfaceMaterial& surface, bool& accept) mutable {
+    // What it may change is saved as plain values, without the pair's name: a handler runs for
+    // every contact of its geometry, and a string copy was most of the guard's cost.
+    g->AddObserver([robot = &robot_, part = &part_, handler = std::move(handler)](
+                       const Contact& contact, SurfaceMaterial& surface, bool& accept) {
       if (part->failed) return;
-      before = surface;
+      const SurfaceValues before = SurfaceValues::Of(surface);
       const bool accepted = accept;
-      std::string fault;
+      const char* fault = nullptr;
+      std::string thrown;
       try {
         handler(contact, surface, accept);
         if (!SurfaceFinite(surface)) fault = "set a non-finite surface value";
       } catch (const std::exception& e) {
-        fault = "threw " + ExceptionText(e);
+        thrown = "threw " + ExceptionText(e);
+        fault = thrown.c_str();
       } catch (...) {
         fault = kNotStd;
       }
-      if (fault.empty()) return;
-      surface = before;
+      if (!fault) return;
+      before.WriteTo(surface);
       accept = accepted;
       robot->Fail(*part, "contact handler", fault);
     });
