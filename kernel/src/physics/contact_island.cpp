@@ -97,7 +97,11 @@ void StaticContactLog::Make(const dContact& contact, dBodyID a, dBodyID b) {
   }
   dBodyID body = a ? a : b;
   BodyContacts& owner = Of(body);
-  contacts_.push_back(StaticContact{contact, body, a == nullptr, owner.newest});
+  // Built in place: a contact is 300 bytes, and a temporary would copy it twice.
+  StaticContact& kept = contacts_.emplace_back(contact);
+  kept.body = body;
+  kept.reversed = a == nullptr;
+  kept.previous = owner.newest;
   owner.newest = static_cast<int>(contacts_.size()) - 1;
   if (owner.joined) MakeJoint(contacts_.back());
 }

@@ -15,7 +15,9 @@ namespace ubersim::kernel {
 /// A contact of one body with the static world, as the kernel makes it for ODE.
 /// ContactIslandStepper writes the contact's constraint rows from it.
 struct StaticContact {
-  dContact contact{};     ///< as given to dJointCreateContact
+  /// A contact not yet placed: its body, side and predecessor are set next.
+  explicit StaticContact(const dContact& c) : contact(c) {}
+  dContact contact;       ///< as given to dJointCreateContact
   dBodyID body = nullptr; ///< the body touching the static world
   bool reversed = false;  ///< the body is the contact's second: ODE turns the normal round
   int previous = -1;      ///< the body's contact made before this one (-1: none)

@@ -69,9 +69,10 @@ void FinishBodyStep(dBodyID body, dReal inverse_mass, const dReal* inverse_inert
   dMultiplyAdd0_331(angular, inverse_inertia, torque);
 
   // Pose: dBodySetQuaternion normalises and converts to the rotation matrix as dxStepBody does,
-  // and each setter tells the body's geometries that it moved.
-  dVector3 position;
-  std::memcpy(position, dBodyGetPosition(body), sizeof position);
+  // and tells the body's geometries that it moved. The position goes straight into the body's
+  // own array (dBodyGetPosition's pointer is ODE's storage, not a copy): dBodySetPosition would
+  // tell every geometry a second time, a third of a wheel robot's integration.
+  auto* position = const_cast<dReal*>(dBodyGetPosition(body));
   for (int k = 0; k < 3; ++k) position[k] += dt * linear[k];
   dQuaternion q;
   std::memcpy(q, dBodyGetQuaternion(body), sizeof q);
@@ -81,7 +82,6 @@ void FinishBodyStep(dBodyID body, dReal inverse_mass, const dReal* inverse_inert
 
   dBodySetLinearVel(body, linear[0], linear[1], linear[2]);
   dBodySetAngularVel(body, angular[0], angular[1], angular[2]);
-  dBodySetPosition(body, position[0], position[1], position[2]);
   dBodySetQuaternion(body, q);
   dBodySetForce(body, 0, 0, 0);
   dBodySetTorque(body, 0, 0, 0);
