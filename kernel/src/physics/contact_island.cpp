@@ -124,7 +124,11 @@ const StaticContact* StaticContactLog::Kept(dBodyID body) const {
 }
 
 bool IsStaticContactIsland(dBodyID body, const StaticContactLog& log) {
-  return log.Kept(body) && dBodyGetJoint(body, 0) == nullptr && StepsAsQuickStepsAFreeBody(body);
+  return IsStaticContactIsland(body, log.Kept(body));
+}
+
+bool IsStaticContactIsland(dBodyID body, const StaticContact* kept) {
+  return kept && dBodyGetJoint(body, 0) == nullptr && StepsAsQuickStepsAFreeBody(body);
 }
 
 // Everything below follows ODE 0.16's order of operations (joints/contact.cpp, quickstep.cpp)
@@ -271,6 +275,11 @@ void ContactIslandStepper::AddContactRows(const StaticContact& sc, const dReal* 
 
 void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const dReal* gravity,
                                 const ContactSolverSettings& settings, int iterations, dReal dt) {
+  Step(body, *log.Kept(body), log, gravity, settings, iterations, dt);
+}
+
+void ContactIslandStepper::Step(dBodyID body, const StaticContact& newest, const StaticContactLog& log,
+                                const dReal* gravity, const ContactSolverSettings& settings, int iterations, dReal dt) {
   // Stage 0: gravity, the world-frame inverse inertia, the gyroscopic torque.
   FreeBodyStart b;
   StartFreeBodyStep(body, gravity, inverse_inertia_, b);
@@ -288,7 +297,7 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
   row_count_ = 0;
   const dReal* position = dBodyGetPosition(body);
   // Newest first: the order of the body's joint list, had they been ODE joints.
-  for (const StaticContact* c = log.Kept(body); c; c = c->previous >= 0 ? &log.At(c->previous) : nullptr) {
+  for (const StaticContact* c = &newest; c; c = c->previous >= 0 ? &log.At(c->previous) : nullptr) {
     AddContactRows(*c, position, linear, angular, settings, fps);
   }
   dReal rhs_tmp[6];

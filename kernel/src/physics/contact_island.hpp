@@ -88,6 +88,8 @@ struct ContactSolverSettings {
 /// Whether `body` is an island ContactIslandStepper steps as QuickStep would: a body the kernel
 /// can step freely (StepsAsQuickStepsAFreeBody) with contacts `log` kept and no ODE joint.
 bool IsStaticContactIsland(dBodyID body, const StaticContactLog& log);
+/// The same with `kept`, the log's Kept(body), looked up already.
+bool IsStaticContactIsland(dBodyID body, const StaticContact* kept);
 
 /// Steps static-contact islands (IsStaticContactIsland) the way ODE 0.16's QuickStep steps a
 /// one-body island, floating-point operation for floating-point operation: the contact joints'
@@ -105,6 +107,9 @@ class ContactIslandStepper {
   /// world's, m/s²), with `iterations` SOR sweeps and the world's `settings`.
   void Step(dBodyID body, const StaticContactLog& log, const dReal* gravity, const ContactSolverSettings& settings,
             int iterations, dReal dt);
+  /// The same with `newest`, the log's Kept(body), looked up already.
+  void Step(dBodyID body, const StaticContact& newest, const StaticContactLog& log, const dReal* gravity,
+            const ContactSolverSettings& settings, int iterations, dReal dt);
 
  private:
   // One constraint row, as QuickStep lays it out: the Jacobian (linear, angular) and its

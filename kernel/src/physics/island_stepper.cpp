@@ -160,14 +160,14 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     dBodyID b = bodies[i];
     if (!dBodyIsEnabled(b)) continue;
-    const bool kept = static_contacts_ && static_contacts_->Kept(b);
+    const StaticContact* kept = static_contacts_ ? static_contacts_->Kept(b) : nullptr;
     if (!InPass(i, pass)) {
       paused_.push_back(b);
-    } else if (kept && IsStaticContactIsland(b, *static_contacts_)) {
-      own_.push_back({b, true});
+    } else if (kept && IsStaticContactIsland(b, kept)) {
+      own_.push_back({b, kept});
       ++on_field;
     } else if (!kept && IsLoneBody(b)) {
-      own_.push_back({b, false});
+      own_.push_back({b, nullptr});
     } else {
       if (kept) static_contacts_->Join(b);  // QuickStep's: its contacts become ODE joints
       ++solved;
@@ -198,7 +198,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   if (on_field > 0) settings_ = ContactSolverSettings::Of(world);
   for (const OwnIsland& o : own_) {
     if (o.contacts) {
-      contact_stepper_.Step(o.body, *static_contacts_, gravity_, settings_, iterations, dt);
+      contact_stepper_.Step(o.body, *o.contacts, *static_contacts_, gravity_, settings_, iterations, dt);
     } else {
       lone_stepper_.Step(o.body, gravity_, dt);
     }
@@ -270,7 +270,7 @@ void IslandStepper::InterleavedPass(dWorldID world, const std::vector<dBodyID>& 
     if (const OwnIsland* o = own_island(b)) {
       if (o->contacts) {
         flush();
-        contact_stepper_.Step(b, *static_contacts_, gravity_, settings_, iterations, dt);
+        contact_stepper_.Step(b, *o->contacts, *static_contacts_, gravity_, settings_, iterations, dt);
       }
       continue;
     }

@@ -107,7 +107,7 @@ class IslandStepper {
   ContactSolverSettings settings_;     // the world's, read in a pass with static-contact islands
   struct OwnIsland {
     dBodyID body;
-    bool contacts;  // a static-contact island; else a lone body
+    const StaticContact* contacts;  // a static-contact island's newest contact; null: a lone body
   };
   std::vector<dBodyID> ball_islands_;  // scratch, reused each step
   std::vector<int> group_;             // per body of Step's list: its pass
