@@ -1024,7 +1024,7 @@ void CollisionManager::AddContacts(GeomImpl& a, GeomImpl& b, int n, const double
     if (directional) {
       // The body's orientation alone: its pose would copy the position too, once per wheel contact.
       const Quat q = directional->body() ? ToQuat(dBodyGetQuaternion(directional->body()->id())) : Quat::Identity();
-      Vec3 dir = q * *directional->friction_axis();
+      Vec3 dir = Rotate(q, *directional->friction_axis());
       dir -= normal * normal.dot(dir);  // project onto the contact plane
       if (dir.norm() > 1e-6) {
         dir.normalize();

@@ -16,6 +16,11 @@ namespace ubersim::kernel {
 namespace {
 
 bool SurfaceFinite(const SurfaceMaterial& s) {
+  // NaN and infinity survive a sum: one test for every contact; the values one by one only when
+  // the sum is not finite (finite values may add up to infinity).
+  const double sum = s.mu + s.mu2 + s.bounce + s.bounce_velocity + s.soft_erp + s.soft_cfm + s.rolling_friction +
+                     s.slip + s.surface_velocity.x() + s.surface_velocity.y() + s.surface_velocity.z();
+  if (std::isfinite(sum)) return true;
   return std::isfinite(s.mu) && std::isfinite(s.mu2) && std::isfinite(s.bounce) && std::isfinite(s.bounce_velocity) &&
          std::isfinite(s.soft_erp) && std::isfinite(s.soft_cfm) && std::isfinite(s.rolling_friction) &&
          std::isfinite(s.slip) && s.surface_velocity.allFinite();

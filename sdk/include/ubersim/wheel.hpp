@@ -169,8 +169,8 @@ class ContactWheel {
     const double wanted = spin_inertia_ * (target_ - rate_) / dt;
     double torque = std::clamp(wanted, -max_torque_, max_torque_);
     if (torque != wanted && touched_) {
-      const double ground = chassis_->PointVelocity(pose.position + pose.orientation * contact_point_)
-                                .dot(pose.orientation * rolling_);
+      const double ground = chassis_->PointVelocity(pose.position + Rotate(pose.orientation, contact_point_))
+                                .dot(Rotate(pose.orientation, rolling_));
       const double slip = rate_ * radius_ - ground;  // the rim over the carpet
       const double pull = static_load_ * radius_ * (grip_mu_ * grip_share_ + free_mu_ * free_share_);
       if (std::abs(slip) > 1e-3) torque -= std::copysign(pull, slip);
@@ -205,15 +205,6 @@ class ContactWheel {
  private:
   // The rim's velocity over the chassis, world frame, with the chassis turned by `orientation`.
   void Aim(const Quat& orientation) { surface_velocity_ = Rotate(orientation, rolling_) * (-rate_ * radius_); }
-  // orientation * v as Eigen computes it (QuaternionBase::_transformVector, operation for
-  // operation, so the same bits), written here to be inlined: Eigen's is a call, twice per wheel
-  // and step.
-  static Vec3 Rotate(const Quat& orientation, const Vec3& v) {
-    const Vec3 axis = orientation.vec();
-    Vec3 uv = axis.cross(v);
-    uv += uv;
-    return v + orientation.w() * uv + axis.cross(uv);
-  }
 
   Body* chassis_;
   Vec3 axle_;             // chassis frame
