@@ -522,11 +522,27 @@ void CollisionManager::GroupForField() {
   // planes, never does), plane by plane, each plane's in the group's order.
   for (FieldGroup& group : field_groups_) {
     for (std::size_t p = 0; p < field_planes_.size(); ++p) {
+      FieldGeom cover{nullptr, group.geoms.front().position, group.geoms.front().rotation, Vec3::Zero(),
+                      Vec3::Constant(-1.0)};
+      Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
       for (std::size_t i = 0; i < group.geoms.size(); ++i) {
-        if (MayEverCollide(*group.geoms[i].geom, *field_planes_[p].geom)) group.on_planes.emplace_back(p, i);
+        const FieldGeom& g = group.geoms[i];
+        if (!MayEverCollide(*g.geom, *field_planes_[p].geom)) continue;
+        const bool covered = !IsSphere(*g.geom) && g.position == cover.position;
+        group.on_planes.push_back({p, i, covered});
+        if (covered) {
+          lo = lo.cwiseMin(g.centre - g.half);
+          hi = hi.cwiseMax(g.centre + g.half);
+        }
       }
+      if (lo.x() <= hi.x()) {
+        cover.centre = 0.5 * (lo + hi);
+        cover.half = 0.5 * (hi - lo);
+      }
+      group.plane_covers.push_back(cover);
     }
   }
+  cover_above_.assign(field_planes_.size(), 0);
   field_order_.resize(field_groups_.size());
   for (std::size_t i = 0; i < field_order_.size(); ++i) field_order_[i] = i;
   field_grouped_ = true;
@@ -590,11 +606,19 @@ void CollisionManager::ForEachFieldPair(F& f) {
     }
     // A plane's box is infinite: every geometry meets it in the narrow phase (which drops what
     // lies wholly on its free side).
-    // A sphere goes straight to the narrow phase, whose exact test is as cheap as the box's.
-    for (const auto& [p, i] : group.on_planes) {
+    // A cover above its plane by more than rounding holds every box inside it above too.
+    for (std::size_t p = 0; p < field_planes_.size(); ++p) {
+      const FieldGeom& c = group.plane_covers[p];
       const FieldPlane& plane = field_planes_[p];
-      const FieldGeom& b = group.geoms[i];
+      cover_above_[p] = c.half.x() >= 0 &&
+                        BodyBoxAbovePlane(c.position, c.rotation, c.centre, c.half, plane.normal, plane.offset + 1e-9);
+    }
+    // A sphere goes straight to the narrow phase, whose exact test is as cheap as the box's.
+    for (const FieldGroup::OnPlane& on : group.on_planes) {
+      const FieldPlane& plane = field_planes_[on.plane];
+      const FieldGeom& b = group.geoms[on.geom];
       if (!b.geom->collides() || !plane.geom->collides()) continue;
+      if (on.covered && cover_above_[on.plane]) continue;
       if (!IsSphere(*b.geom) && BodyBoxAbovePlane(b.position, b.rotation, b.centre, b.half, plane.normal, plane.offset)) {
         continue;
       }

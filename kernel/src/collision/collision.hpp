@@ -243,7 +243,15 @@ class CollisionManager {
   struct FieldGroup {
     std::vector<FieldGeom> geoms;
     std::vector<std::pair<dBodyID, double>> bodies;  // body, reach (m)
-    std::vector<std::pair<std::size_t, std::size_t>> on_planes;  // (plane, geometry) that may meet
+    struct OnPlane {
+      std::size_t plane, geom;  // indices into field_planes_, geoms
+      bool covered;             // inside its plane's cover
+    };
+    std::vector<OnPlane> on_planes;  // the geometries that may meet each plane, plane by plane
+    // Per plane, one box in the group's first body's frame around its geometries on that body
+    // that are no spheres (a robot's shell and dribbler): a robot standing on its wheels is
+    // above the carpet by that one test. Empty (half < 0) when there is none.
+    std::vector<FieldGeom> plane_covers;
     double lo[3], hi[3];                              // this step's box
     bool active = false;                              // any geometry collides
   };
@@ -261,6 +269,7 @@ class CollisionManager {
   std::vector<std::size_t> field_order_;     // field_groups_ by the box's low x (then index)
   std::vector<StaticGeom> field_statics_;    // the field's fixed geometries but planes
   std::vector<FieldPlane> field_planes_;
+  std::vector<char> cover_above_;            // per plane, this group's cover wholly above it
   bool field_grouped_ = false;
 
   SceneGraph& graph_;

@@ -79,9 +79,14 @@ void IslandStepper::GroupByDemand(const std::vector<dBodyID>& bodies, const std:
     if (d.body && d.iterations > other_iterations_) seeds_.push_back(d);
   }
   // The highest count first, so an island reached from two seeds gets the higher; balls before
-  // demands of the same count.
-  std::stable_sort(seeds_.begin(), seeds_.end(),
-                   [](const IterationDemand& a, const IterationDemand& b) { return a.iterations > b.iterations; });
+  // demands of the same count. Stable, by insertion: a few dozen seeds, mostly in order, and
+  // std::stable_sort would allocate its buffer every step.
+  for (std::size_t i = 1; i < seeds_.size(); ++i) {
+    const IterationDemand moving = seeds_[i];
+    std::size_t j = i;
+    for (; j > 0 && seeds_[j - 1].iterations < moving.iterations; --j) seeds_[j] = seeds_[j - 1];
+    seeds_[j] = moving;
+  }
   pass_iterations_.clear();
   marked_.clear();
   const auto pass_of = [this](int iterations) {
