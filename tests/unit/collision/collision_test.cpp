@@ -91,6 +91,60 @@ INSTANTIATE_TEST_SUITE_P(ExactBroadphases, CollisionAgainstBruteForce,
                          ::testing::Values(Broadphase::kSceneGraph, Broadphase::kSweepAndPrune, Broadphase::kField),
                          [](const auto& info) { return std::string(ToString(info.param)); });
 
+// Bodies of a few geometries each (spheres and boxes off the body's origin, as a robot's wheel
+// contacts, shell and dribbler) at random heights and tilts over a carpet: the field broadphase
+// tests a body's boxes against the carpet once for all of them before any alone, and must still
+// find every geometry the brute force finds touching it.
+TEST(CollisionAgainstBruteForceOnACarpet, FieldFindsEveryGeometryTouchingThePlane) {
+  OdeLibrary ode;
+  std::mt19937_64 rng(20261202);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::size_t plane_pairs = 0, box_plane_pairs = 0, bodies_partly_down = 0;
+  for (int scene = 0; scene < 200; ++scene) {
+    OdeWorld world(dWorldCreate());
+    SceneGraph graph(world.get());
+    CollisionManager cm(graph, Broadphase::kField, 8);
+    graph.Root().AddChild("field").AddGeom(GeomSpec{"carpet", Shape::Plane(Vec3::UnitZ(), 0), {}, {}, {}, true}, nullptr);
+    for (int r = 0; r < 6; ++r) {
+      SceneNode& node = graph.Root().AddChild("body" + std::to_string(r));
+      BodySpec spec;
+      spec.name = "chassis";
+      spec.mass = MassSpec::Solid(Shape::Box(0.1, 0.1, 0.1), 1.0);
+      // Mostly standing a little above the carpet, some tilted far enough to put a box into it.
+      const double tilt = 0.6 * unit(rng);
+      spec.pose = Pose{Vec3(0.5 * r, 0.3 * unit(rng), 0.03 + 0.03 * unit(rng)),
+                       Quat(Eigen::AngleAxisd(tilt, Vec3(unit(rng), unit(rng), 0.2).normalized()))};
+      Body& body = node.AddBody(spec);
+      node.AddGeom(GeomSpec{"wheel", Shape::Sphere(0.03), Pose{Vec3(0.05, 0.05, -0.01), Quat::Identity()}, {}, {}, true},
+                   &body);
+      node.AddGeom(GeomSpec{"shell", Shape::Box(0.16, 0.16, 0.08), Pose{Vec3(0, 0, 0.05), Quat::Identity()}, {}, {}, true},
+                   &body);
+      node.AddGeom(GeomSpec{"bar", Shape::Box(0.02, 0.1, 0.02),
+                            Pose{Vec3(0.09, 0, 0.01), Quat(Eigen::AngleAxisd(0.3, Vec3::UnitY()))}, {}, {}, true},
+                   &body);
+    }
+    const PairSet expected = BruteForce(graph);
+    ASSERT_EQ(Reported(cm), expected) << "scene " << scene;
+    std::set<std::string> down;
+    for (const auto& [a, b] : expected) {
+      const bool a_carpet = a.ends_with(":carpet"), b_carpet = b.ends_with(":carpet");
+      if (a_carpet == b_carpet) continue;
+      const std::string& other = a_carpet ? b : a;
+      ++plane_pairs;
+      if (!other.ends_with(":wheel")) {
+        ++box_plane_pairs;
+        down.insert(other.substr(0, other.find(':')));
+      }
+    }
+    bodies_partly_down += down.size();
+  }
+  // Both outcomes must occur, or the comparison proves nothing: boxes on the carpet, and bodies
+  // standing clear of it on their spheres.
+  EXPECT_GT(box_plane_pairs, 100u);
+  EXPECT_GT(bodies_partly_down, 100u);
+  EXPECT_LT(box_plane_pairs, plane_pairs);
+}
+
 // ODE 0.16.2's hash space misses pairs whose boxes straddle a cell boundary at 0 (see
 // docs/collision.md): it must never invent a pair, and the misses are counted and reported.
 TEST(CollisionAgainstBruteForceOdeHash, ReportsOnlyTrueTouchingPairs) {
