@@ -274,6 +274,8 @@ void CollisionManager::Refile() {
   sweep_shells_.clear();
   sweep_shell_reach_.clear();
   sweep_target_reach_.clear();
+  sweep_run_end_.clear();
+  sweep_run_reach_.clear();
   hulls_found_ = false;
   hulls_.clear();
   hull_slack_.clear();
@@ -805,6 +807,15 @@ void CollisionManager::SweepFastBalls() {
         sweep_target_reach_.push_back(ReachFromBody(g));
       }
     });
+    // Runs of targets on one body, each run's farthest reach (a run's first entry is read).
+    sweep_run_end_.assign(sweep_targets_.size(), 0);
+    sweep_run_reach_.assign(sweep_targets_.size(), 0.0);
+    for (std::size_t k = sweep_targets_.size(); k-- > 0;) {
+      const bool same = k + 1 < sweep_targets_.size() && sweep_targets_[k]->body() &&
+                        sweep_targets_[k + 1]->body() == sweep_targets_[k]->body();
+      sweep_run_end_[k] = same ? sweep_run_end_[k + 1] : k + 1;
+      sweep_run_reach_[k] = same ? std::max(sweep_target_reach_[k], sweep_run_reach_[k + 1]) : sweep_target_reach_[k];
+    }
     balls_found_ = true;
   }
   for (GeomImpl* ball : balls_) {
@@ -832,11 +843,21 @@ void CollisionManager::SweepFastBalls() {
     const double reach = v.norm() * swept_ball_step_;
     if (reach <= 0.1 * radius) continue;
     const bool slow = reach <= 0.5 * radius;
+    const dReal* at = nullptr;  // the position of the body of the run being walked
     for (std::size_t k = 0; k < sweep_targets_.size(); ++k) {
       GeomImpl& other = *sweep_targets_[k];
+      if (other.body() && (k == 0 || sweep_targets_[k - 1]->body() != other.body())) {
+        // A run's first target: its body's position, and the whole run passed when even its
+        // farthest-reaching part is out of reach (then each part's own test fails too).
+        at = dBodyGetPosition(other.body()->id());
+        const double run_bound = reach + radius + sweep_run_reach_[k];
+        if ((from - Vec3(at[0], at[1], at[2])).squaredNorm() > run_bound * run_bound) {
+          k = sweep_run_end_[k] - 1;
+          continue;
+        }
+      }
       if (&other == ball || (slow && !other.body())) continue;
       if (other.body()) {  // a robot's part: out of reach by its body's position, as the shells
-        const dReal* at = dBodyGetPosition(other.body()->id());
         const double bound = reach + radius + sweep_target_reach_[k];
         if ((from - Vec3(at[0], at[1], at[2])).squaredNorm() > bound * bound) continue;
       }

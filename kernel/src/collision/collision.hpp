@@ -289,6 +289,10 @@ class CollisionManager {
   std::vector<GeomImpl*> sweep_shells_;   // robots' shells, swept by the ball's speed relative to them
   std::vector<double> sweep_shell_reach_;  // how far each shell reaches from its body's origin, m
   std::vector<double> sweep_target_reach_; // the same for each target (0 for the static ones)
+  // Per target on a body: where the run of targets on that same body (from it on) ends, and the
+  // farthest any of them reaches: a robot's parts out of the ball's reach are passed in one test.
+  std::vector<std::size_t> sweep_run_end_;
+  std::vector<double> sweep_run_reach_;
   bool balls_found_ = false;
   double swept_robot_step_ = 0.0;
   double robot_contact_erp_ = -1.0;
