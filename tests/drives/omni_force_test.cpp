@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <ostream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -520,6 +521,24 @@ TEST(HeadingOf, TurnsAGlobalVectorAsTheYawsCosAndSinDo) {
   EXPECT_NEAR(command.linear.x(), 2.0, 1e-12);  // +y is straight ahead of a robot facing +y
   EXPECT_NEAR(command.linear.y(), 0.0, 1e-12);
   EXPECT_EQ(command.angular, 1.0);
+}
+
+// The SDK's inlined quaternion rotation (math.hpp) gives Eigen's q * v to the bit: the wheels and
+// every wheel contact use it, and the pinned hashes assume it changes nothing.
+TEST(Rotate, TurnsAVectorAsEigensQuaternionProductToTheBit) {
+  std::mt19937_64 rng(20261202);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int i = 0; i < 1000; ++i) {
+    const Quat q = Quat(unit(rng), unit(rng), unit(rng), unit(rng)).normalized();
+    const Vec3 v(unit(rng), unit(rng), unit(rng));
+    const Vec3 eigen = q * v;
+    const Vec3 ours = Rotate(q, v);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(ours[k], eigen[k]) << "sample " << i << ", component " << k;
+  }
+  EXPECT_EQ(Rotate(Quat::Identity(), Vec3(1, 2, 3)), Vec3(1, 2, 3));
+  const Vec3 quarter = Rotate(Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ())), Vec3::UnitX());
+  EXPECT_NEAR(quarter.x(), 0.0, 1e-15);
+  EXPECT_NEAR(quarter.y(), 1.0, 1e-15);
 }
 
 }  // namespace

@@ -997,7 +997,7 @@ const SurfaceMaterial& CollisionManager::PairSurface(const GeomImpl& a, const Ge
   }
   bool fresh = false;
   CachedSurface* cached = nullptr;
-  if (memo && memo->other == &b && memo->other_serial == b.serial() && memo->epoch == surfaces_epoch_) {
+  if (memo && memo->other_serial == b.serial() && memo->epoch == surfaces_epoch_) {
     cached = memo->cached;
   } else {
     if (surfaces_.size() >= kMaxCachedSurfaces && !surfaces_.contains({&a, &b})) {
@@ -1007,7 +1007,7 @@ const SurfaceMaterial& CollisionManager::PairSurface(const GeomImpl& a, const Ge
     auto [it, added] = surfaces_.try_emplace({&a, &b});
     cached = &it->second;  // a node of the map: it stays put until erased
     fresh = added;
-    if (memo) *memo = SurfaceMemo{&b, b.serial(), cached, surfaces_epoch_};
+    if (memo) *memo = SurfaceMemo{b.serial(), cached, surfaces_epoch_};
   }
   CachedSurface& c = *cached;
   // The serials tell a geometry from one made later at a freed one's address.

@@ -212,11 +212,11 @@ class CollisionManager {
     std::uint64_t last_pass = 0;  // the Collide() pass that last used it
   };
   // The surface a geometry's last pair used, by the geometry's serial: a wheel meets the carpet
-  // step after step, and the memo spares the pair's lookup in surfaces_. Valid while `epoch` is
+  // step after step, and the memo spares the pair's lookup in surfaces_. Valid for the other
+  // geometry of that serial (serials are never reused, addresses are) while `epoch` is
   // surfaces_epoch_ (nothing erased from surfaces_ since).
   struct SurfaceMemo {
-    const GeomImpl* other = nullptr;
-    std::uint64_t other_serial = 0;
+    std::uint64_t other_serial = 0;  // 0: none (serials start at 1)
     CachedSurface* cached = nullptr;
     std::uint64_t epoch = 0;
   };
