@@ -10,6 +10,8 @@
 //                           the SDK's finite-only calls (1e308 N twice; a far-off point: inf - inf)
 //   contact_nan             its wheel's contact handler sets the friction to NaN
 //   contact_throws          its wheel's contact handler throws
+//   contact_huge            its wheel's contact handler sets two values finite but so large their
+//                           sum is not (no fault: the guard's one-sum test must look closer)
 //   segfault                PreStep raises SIGSEGV (the crash report's test)
 #include <csignal>
 #include <limits>
@@ -47,6 +49,10 @@ class FaultyDrive final : public ubersim::Drive {
       if (!active_) return;
       if (fault_ == "contact_nan") s.mu = std::numeric_limits<double>::quiet_NaN();
       if (fault_ == "contact_throws") throw std::runtime_error("contact handler bug");
+      if (fault_ == "contact_huge") {
+        s.mu = 1e308;  // grips without a limit (ODE takes dInfinity too)
+        s.bounce_velocity = 1e308;  // read only with a bounce, and there is none
+      }
     });
     if (fault_ == "configure_throws") throw std::out_of_range("wheel index 4 of 4");
   }
