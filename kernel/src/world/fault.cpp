@@ -191,10 +191,8 @@ void BodyWatch::Add(const BodyImpl& body) {
   checked_.reset();
 }
 
-bool BodyWatch::AllFinite() {
-  if (!accumulations_) return true;  // nothing watched
+bool BodyWatch::Recheck() {
   const std::uint64_t accumulations = *accumulations_;
-  if (checked_ == accumulations) return true;
   // Three sums, one per component: independent additions the processor overlaps.
   dReal x = 0, y = 0, z = 0;
   for (const dReal* v : vectors_) {

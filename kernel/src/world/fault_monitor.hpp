@@ -92,9 +92,10 @@ class BodyWatch {
   void Add(const BodyImpl& body);
   /// True when every watched value is finite (without looking, when nothing was added to any
   /// body since a check that found them finite).
-  bool AllFinite();
+  bool AllFinite() { return !accumulations_ || checked_ == *accumulations_ || Recheck(); }
 
  private:
+  bool Recheck();  // AllFinite's look at the values
   std::vector<const dReal*> vectors_;  // 3 values each
   const std::uint64_t* accumulations_ = nullptr;  // the scene graph's counter
   std::optional<std::uint64_t> checked_;          // its value when last found finite

@@ -323,7 +323,7 @@ bool Robot::Guarded(Part& p, const char* phase, F&& call) {
   } catch (...) {
     Fail(p, phase, kNotStd);
   }
-  CheckAfter(p, phase);
+  if (!watch_.AllFinite()) ReportNonFinite(p, phase);
   return !p.failed;
 }
 
@@ -339,8 +339,7 @@ void Robot::Queried(Part& p, const char* phase, F&& call) const {
   }
 }
 
-void Robot::CheckAfter(Part& p, const char* phase) {
-  if (watch_.AllFinite()) return;
+void Robot::ReportNonFinite(Part& p, const char* phase) {
   std::string where = FindNonFinite(*node_);
   if (where.empty() && services_.ball) where = "ball: " + NonFiniteIn(*services_.ball);
   Fail(p, phase, "left a non-finite value: " + where);

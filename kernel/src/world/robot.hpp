@@ -102,8 +102,8 @@ class Robot {
   // As Guarded for a query (TouchesBall, Ready), which changes nothing to check afterwards.
   template <typename F>
   void Queried(Part& part, const char* phase, F&& call) const;
-  // After a call into `part`: a non-finite value left in the robot or the ball is its fault.
-  void CheckAfter(Part& part, const char* phase);
+  // After a call into `part` left a non-finite value in the robot or the ball: its fault.
+  void ReportNonFinite(Part& part, const char* phase);
   // Puts the robot's and the ball's non-finite bodies back to the last good state.
   void Repair();
   void BuildCylinderChassis(const RobotPlacement& placement);

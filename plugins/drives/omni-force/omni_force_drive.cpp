@@ -289,33 +289,41 @@ class OmniForceDrive final : public ubersim::Drive {
   // and settles in a few steps (see Configure).
   void PushWheels(ubersim::Body& chassis, const Eigen::Vector2d& heading_unit, const ubersim::Twist& twist,
                   const WheelSpeeds& targets, double dt) {
-    // The heading as a rotation of the carpet plane: robot frame (x, y) to world (x, y).
-    Eigen::Matrix2d heading;
-    heading << heading_unit.x(), -heading_unit.y(), heading_unit.y(), heading_unit.x();
+    // Plain scalars, in the order of the 2-D vector algebra they spell out (the heading turns
+    // robot-frame (x, y) into the carpet's: (hx·x − hy·y, hy·x + hx·y)): a quarter of a step's
+    // drive work went to building small vectors.
+    const double hx = heading_unit.x(), hy = heading_unit.y();
+    const double mass = chassis.Mass();
+    const Vec3 gravity = ctx_->Gravity();
     const double n = static_cast<double>(wheels_.size());
-    const double load = chassis.Mass() / n * ctx_->Gravity().norm();  // N: static, no load transfer
-    const double share = chassis.Mass() / n * servo_scale_;            // kg each wheel moves
-    const double motor_force = max_torque_ / wheel_radius_;     // N at the contact
+    const double load = mass / n * gravity.norm();  // N: static, no load transfer
+    const double share = mass / n * servo_scale_;   // kg each wheel moves
+    const double motor_force = max_torque_ / wheel_radius_;  // N at the contact
     const double drive_limit = std::min(motor_force, mu_roll_ * load);
     const double roller_limit = mu_axle_ * load;
-    const Eigen::Vector2d velocity = twist.linear.head<2>();
+    const double vx = twist.linear.x(), vy = twist.linear.y();
     const double spin = twist.angular.z();
-    Eigen::Vector2d force = Eigen::Vector2d::Zero();
-    double torque = 0.0;
+    double fx = 0.0, fy = 0.0, torque = 0.0;
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
       const Wheel& w = wheels_[i];
-      const Eigen::Vector2d arm = heading * w.centre.head<2>();  // centre of mass to the contact, in the carpet plane
-      const Eigen::Vector2d rolling = heading * w.tangent.head<2>();
-      const Eigen::Vector2d axle(-rolling.y(), rolling.x());    // up × rolling
-      const Eigen::Vector2d v = velocity + spin * Eigen::Vector2d(-arm.y(), arm.x());  // at the contact
+      // Centre of mass to the contact and the rolling direction, in the carpet plane.
+      const double ax = hx * w.centre.x() + -hy * w.centre.y();
+      const double ay = hy * w.centre.x() + hx * w.centre.y();
+      const double rx = hx * w.tangent.x() + -hy * w.tangent.y();
+      const double ry = hy * w.tangent.x() + hx * w.tangent.y();
+      // The contact point's velocity; the axle is up × rolling = (−ry, rx).
+      const double px = vx + spin * -ay;
+      const double py = vy + spin * ax;
       const double surface_speed = targets(static_cast<Eigen::Index>(i)) * wheel_radius_;
-      const double drive = std::clamp(share * (surface_speed - v.dot(rolling)) / dt, -drive_limit, drive_limit);
-      const double roller = std::clamp(-share * v.dot(axle) / dt, -roller_limit, roller_limit);
-      const Eigen::Vector2d push = rolling * drive + axle * roller;
-      force += push;
-      torque += arm.x() * push.y() - arm.y() * push.x();
+      const double drive = std::clamp(share * (surface_speed - (px * rx + py * ry)) / dt, -drive_limit, drive_limit);
+      const double roller = std::clamp(-share * (px * -ry + py * rx) / dt, -roller_limit, roller_limit);
+      const double push_x = rx * drive + -ry * roller;
+      const double push_y = ry * drive + rx * roller;
+      fx += push_x;
+      fy += push_y;
+      torque += ax * push_y - ay * push_x;
     }
-    chassis.AddForce(Vec3(force.x(), force.y(), 0.0) - chassis.Mass() * ctx_->Gravity());
+    chassis.AddForce(Vec3(fx, fy, 0.0) - mass * gravity);
     chassis.AddTorque(Vec3(0.0, 0.0, torque));
   }
 

@@ -91,10 +91,11 @@ class SolenoidKicker final : public ubersim::Kicker {
   // The ball's centre in the robot's horizontal frame (x forward, y left; z above the carpet).
   Vec3 BallInRobotFrame(const ubersim::Body& ball) const {
     const ubersim::Pose chassis = ctx_->Chassis().GetPose();
-    const double yaw = chassis.Yaw();
-    const Vec3 d = ball.GetPose().position - chassis.position;
-    return Vec3(std::cos(yaw) * d.x() + std::sin(yaw) * d.y(), -std::sin(yaw) * d.x() + std::cos(yaw) * d.y(),
-                ball.GetPose().position.z());
+    const Vec3 at = ball.GetPose().position;
+    // The heading's unit vector, not cos and sin of its angle: an armed kicker asks every step.
+    const Eigen::Vector2d forward = ubersim::ToRobotFrame(ubersim::HeadingOf(chassis.orientation),
+                                                          at.x() - chassis.position.x(), at.y() - chassis.position.y());
+    return Vec3(forward.x(), forward.y(), at.z());
   }
 
   bool BallInZone(const ubersim::Body& ball) const {

@@ -71,7 +71,7 @@ inline Eigen::Vector2d ToRobotFrame(double yaw, double x, double y) {
 /// forward axis points along in the carpet plane: (1, 0) when it points straight up or down
 /// (as atan2(0, 0) = 0). Exact where cos and sin of Pose::Yaw() round: no trigonometry.
 inline Eigen::Vector2d HeadingOf(const Quat& orientation) {
-  const Vec3 forward = orientation * Vec3::UnitX();
+  const Vec3 forward = Rotate(orientation, Vec3::UnitX());
   const double length = std::sqrt(forward.x() * forward.x() + forward.y() * forward.y());
   if (!(length > 0.0)) return Eigen::Vector2d(1.0, 0.0);
   return Eigen::Vector2d(forward.x() / length, forward.y() / length);
