@@ -544,10 +544,59 @@ void CollisionManager::GroupForField() {
       group.plane_covers.push_back(cover);
     }
   }
+  FindStaticsFreeRectangle();
   cover_above_.assign(field_planes_.size(), 0);
   field_order_.resize(field_groups_.size());
   for (std::size_t i = 0; i < field_order_.size(); ++i) field_order_[i] = i;
   field_grouped_ = true;
+}
+
+void CollisionManager::FindStaticsFreeRectangle() {
+  // Grown from the middle of the fixed geometries (the field's centre: walls and goals stand
+  // round it): each box that enters the rectangle is cut off along the side that leaves the
+  // most area. Only ever smaller, so every box cut off earlier stays out.
+  double* r = statics_free_;
+  if (field_statics_.empty()) {
+    r[0] = r[2] = -std::numeric_limits<double>::infinity();
+    r[1] = r[3] = std::numeric_limits<double>::infinity();
+    return;
+  }
+  double lo[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  double hi[2] = {-lo[0], -lo[1]};
+  for (const StaticGeom& s : field_statics_) {
+    for (int k = 0; k < 2; ++k) {
+      lo[k] = std::min(lo[k], s.box[2 * k]);
+      hi[k] = std::max(hi[k], s.box[2 * k + 1]);
+    }
+  }
+  const double centre[2] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])};
+  r[0] = lo[0];
+  r[1] = hi[0];
+  r[2] = lo[1];
+  r[3] = hi[1];
+  for (const StaticGeom& s : field_statics_) {
+    const dReal* b = s.box;
+    if (b[0] >= r[1] || r[0] >= b[1] || b[2] >= r[3] || r[2] >= b[3]) continue;  // outside already
+    double best_area = -1.0;
+    double best[4] = {0, -1, 0, -1};
+    for (int k = 0; k < 2; ++k) {
+      double cut[4] = {r[0], r[1], r[2], r[3]};
+      if (b[2 * k] > centre[k]) {
+        cut[2 * k + 1] = b[2 * k];  // the box lies beyond the centre: the high side moves in
+      } else if (b[2 * k + 1] < centre[k]) {
+        cut[2 * k] = b[2 * k + 1];
+      } else {
+        continue;  // the box spans the centre along this axis
+      }
+      const double area = (cut[1] - cut[0]) * (cut[3] - cut[2]);
+      if (area > best_area) {
+        best_area = area;
+        std::copy(cut, cut + 4, best);
+      }
+    }
+    std::copy(best, best + 4, r);  // none found: empty (low above high), nothing is inside
+    if (best_area < 0) return;
+  }
 }
 
 template <typename F>
@@ -598,7 +647,10 @@ void CollisionManager::ForEachFieldPair(F& f) {
   for (const std::size_t index : field_order_) {
     FieldGroup& group = field_groups_[index];
     if (!group.active) continue;
-    for (StaticGeom& s : field_statics_) {
+    const double* free = statics_free_;
+    const bool among_statics = !(group.lo[0] > free[0] && group.hi[0] < free[1] && group.lo[1] > free[2] &&
+                                 group.hi[1] < free[3]);
+    for (StaticGeom& s : among_statics ? field_statics_ : no_statics_) {
       const dReal* box = s.box;
       if (box[0] > group.hi[0] || group.lo[0] > box[1] || box[2] > group.hi[1] || group.lo[1] > box[3] ||
           box[4] > group.hi[2] || group.lo[2] > box[5]) {

@@ -265,9 +265,14 @@ class CollisionManager {
     double offset;  // normal·p = offset on the plane, m
   };
   static FieldGeom BoxInBodyFrame(GeomImpl& g);
+  void FindStaticsFreeRectangle();  // statics_free_ from field_statics_
   std::vector<FieldGroup> field_groups_;
   std::vector<std::size_t> field_order_;     // field_groups_ by the box's low x (then index)
   std::vector<StaticGeom> field_statics_;    // the field's fixed geometries but planes
+  // A rectangle of the carpet plane (x low, x high, y low, y high, m) that no fixed geometry's
+  // box enters: a group's box inside it meets none of them (most robots, most steps).
+  double statics_free_[4] = {0, -1, 0, -1};
+  std::vector<StaticGeom> no_statics_;       // always empty: what a group inside it looks at
   std::vector<FieldPlane> field_planes_;
   std::vector<char> cover_above_;            // per plane, this group's cover wholly above it
   bool field_grouped_ = false;

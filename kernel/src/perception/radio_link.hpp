@@ -22,6 +22,13 @@ class RadioLink {
   bool Send(CommandEvent command, std::int64_t now_ns);
   /// Commands due by `now_ns`, in arrival order.
   std::vector<CommandEvent> Deliver(std::int64_t now_ns);
+  /// The oldest queued command if it is due by `now_ns` (it stays queued until PopDue), else
+  /// null: Deliver without moving each command into a new vector.
+  const CommandEvent* NextDue(std::int64_t now_ns) const {
+    return !queue_.empty() && queue_.front().first <= now_ns ? &queue_.front().second : nullptr;
+  }
+  /// Drops the command NextDue returned.
+  void PopDue() { queue_.pop_front(); }
   /// Forgets queued commands (world reset).
   void Reset();
   /// Reset with another seed (the world reset with a new seed).

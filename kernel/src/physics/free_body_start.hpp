@@ -26,11 +26,16 @@ struct FreeBodyStart {
 inline void StartFreeBodyStep(dBodyID body, const dReal* gravity, InverseInertiaCache& cache, FreeBodyStart& s) {
   dBodyGetMass(body, &s.mass);
   s.rotation = dBodyGetRotation(body);
+  // Each getter once: they are calls into ODE, which the loop cannot hoist by itself.
+  const dReal* force = dBodyGetForce(body);
+  const dReal* torque = dBodyGetTorque(body);
+  const dReal* linear = dBodyGetLinearVel(body);
+  const dReal* angular = dBodyGetAngularVel(body);
   for (int k = 0; k < 3; ++k) {
-    s.force[k] = dBodyGetForce(body)[k];
-    s.torque[k] = dBodyGetTorque(body)[k];
-    s.linear[k] = dBodyGetLinearVel(body)[k];
-    s.angular[k] = dBodyGetAngularVel(body)[k];
+    s.force[k] = force[k];
+    s.torque[k] = torque[k];
+    s.linear[k] = linear[k];
+    s.angular[k] = angular[k];
   }
   if (dBodyGetGravityMode(body)) {
     // Only the non-zero components: adding m·0 would turn a -0 force into +0.

@@ -19,10 +19,22 @@ bool IsLoneBody(dBodyID body) {
 }
 
 const dReal* InverseInertiaCache::Of(dBodyID body, const dMass& mass) {
-  if (entries_.size() > 4096) entries_.clear();  // bodies come and go: bound it
+  std::size_t at = next_ < entries_.size() && entries_[next_].body == body ? next_ : entries_.size();
+  if (at == entries_.size()) {
+    at = 0;
+    while (at < entries_.size() && entries_[at].body != body) ++at;
+    if (at == entries_.size()) {
+      if (entries_.size() >= 4096) {  // bodies come and go: bound it
+        entries_.clear();
+        at = 0;
+      }
+      entries_.push_back(Entry{body, {}, {}});
+    }
+  }
+  next_ = at + 1;
   // Cached per body and checked against the inertia it came from: a pure function of it, so a
   // body ID ODE reuses for a new body finds either the right inverse or a stale one it replaces.
-  Entry& cached = entries_[body];
+  Entry& cached = entries_[at];
   if (std::memcmp(cached.inertia, mass.I, sizeof mass.I) != 0 || cached.inverse[0] == 0) {
     std::memcpy(cached.inertia, mass.I, sizeof mass.I);
     // What dBodySetMass stored: the Cholesky inverse, or the identity for an inertia that is

@@ -435,6 +435,19 @@ Robot* WorldImpl::FindRobot(const RobotId& id) const {
   return nullptr;
 }
 
+Robot* WorldImpl::FindRobot(const RobotId& id, std::size_t& hint) const {
+  // A team's commands come robot after robot in one order, step after step: the robot after
+  // the last one found is looked at first.
+  if (hint < robots_.size() && robots_[hint]->id() == id) return robots_[hint++].get();
+  for (std::size_t i = 0; i < robots_.size(); ++i) {
+    if (robots_[i]->id() == id) {
+      hint = i + 1;
+      return robots_[i].get();
+    }
+  }
+  return nullptr;
+}
+
 void WorldImpl::ProcessEvents() { ApplyEvents(false); }
 
 void WorldImpl::ApplyEvents(bool stepping) {
@@ -452,7 +465,10 @@ void WorldImpl::ApplyEvents(bool stepping) {
         e);
   }
   // Commands whose radio latency has passed reach their robots now.
-  for (const CommandEvent& c : radio_.Deliver(sim_time_ns_)) Deliver(c);
+  while (const CommandEvent* c = radio_.NextDue(sim_time_ns_)) {
+    Deliver(*c);
+    radio_.PopDue();
+  }
   if (clock_control_.reset_requested) {
     clock_control_.reset_requested = false;
     Reset();
@@ -561,7 +577,7 @@ void WorldImpl::Apply(const PositionEvent& e) {
 
 void WorldImpl::Apply(const CommandEvent& e) {
   ++event_counters_.commands_received[e.robot.team == Team::kBlue ? 0 : 1];
-  Robot* r = FindRobot(e.robot);
+  Robot* r = FindRobot(e.robot, sent_hint_);
   if (!r) {
     ++event_counters_.rejected;
     repeated_.Warn("unknown robot " + ToString(e.robot), "command for unknown robot " + ToString(e.robot) + " ignored",
@@ -621,7 +637,7 @@ void WorldImpl::Deliver(const CommandEvent& e) {
   // The holder lets go of the ball to kick it, or when its dribbler stops.
   if (held_.holder() == e.robot && (e.kick || (e.dribbler_speed && *e.dribbler_speed <= 0))) held_.Release();
   if (e.kick) hold_after_ns_ = sim_time_ns_ + kKickedBallFreeNs;
-  Robot* r = FindRobot(e.robot);
+  Robot* r = FindRobot(e.robot, delivered_hint_);
   std::string why;
   if (r && r->Command(e, why)) {
     ++event_counters_.applied;

@@ -143,6 +143,8 @@ class WorldImpl {
   void Apply(const TransportSettingEvent& e);
   ObjectState Query(const Target& t) const;
   Robot* FindRobot(const RobotId& id) const;
+  // The same, looking first at the robot after `hint` (updated to follow the one found).
+  Robot* FindRobot(const RobotId& id, std::size_t& hint) const;
   // Builds a robot under its team's node from its base model with its announced spec, and adds
   // it to the roster; a robot that fails to build leaves nothing behind (and throws).
   Robot& AddRobot(const RobotPlacement& placement);
@@ -196,6 +198,8 @@ class WorldImpl {
   std::map<std::pair<int, int>, std::pair<std::shared_ptr<const RobotModel>, std::shared_ptr<const RobotModel>>>
       spec_models_;
   std::unique_ptr<ModelLoader> loader_;
+  std::size_t sent_hint_ = 0;       // FindRobot's hints for commands sent and delivered
+  std::size_t delivered_hint_ = 0;
   std::uint64_t roster_version_ = 0;  // counts robots coming, going and rebuilt
   std::shared_ptr<const FieldModel> initial_field_;  // the world file's (a reset goes back to it)
   NodeImpl* team_nodes_[2] = {nullptr, nullptr};  // blue, yellow
