@@ -761,15 +761,23 @@ void CollisionManager::SweepRobots() {
   }
   // The pairs within reach along x, found on the hulls sorted by x; then taken in the hulls'
   // own order, the order their contacts were always made in.
-  swept_order_.resize(swept_.size());
   double farthest = 0.0;
-  for (std::size_t i = 0; i < swept_.size(); ++i) {
-    swept_order_[i] = i;
-    farthest = std::max(farthest, swept_[i].reach_bound);
+  for (const SweptHull& s : swept_) farthest = std::max(farthest, s.reach_bound);
+  // The order the step before left is nearly sorted already (robots move millimetres a step):
+  // insertion sort from it. Ties by index: one order for one state, as from scratch.
+  if (swept_order_.size() != swept_.size()) {
+    swept_order_.resize(swept_.size());
+    for (std::size_t i = 0; i < swept_order_.size(); ++i) swept_order_[i] = i;
   }
-  std::sort(swept_order_.begin(), swept_order_.end(), [this](std::size_t a, std::size_t b) {
+  const auto before = [this](std::size_t a, std::size_t b) {
     return swept_[a].x < swept_[b].x || (swept_[a].x == swept_[b].x && a < b);
-  });
+  };
+  for (std::size_t i = 1; i < swept_order_.size(); ++i) {
+    const std::size_t moving = swept_order_[i];
+    std::size_t j = i;
+    for (; j > 0 && before(moving, swept_order_[j - 1]); --j) swept_order_[j] = swept_order_[j - 1];
+    swept_order_[j] = moving;
+  }
   swept_pairs_.clear();
   for (std::size_t u = 0; u < swept_order_.size(); ++u) {
     const std::size_t i = swept_order_[u];
