@@ -452,7 +452,8 @@ void WorldImpl::ProcessEvents() { ApplyEvents(false); }
 
 void WorldImpl::ApplyEvents(bool stepping) {
   const std::uint64_t roster_before = roster_version_;
-  for (Event& e : events_.Drain()) {
+  events_.Drain(drained_);
+  for (Event& e : drained_) {
     std::visit(
         [this](auto& ev) {
           using T = std::decay_t<decltype(ev)>;
@@ -464,6 +465,7 @@ void WorldImpl::ApplyEvents(bool stepping) {
         },
         e);
   }
+  drained_.clear();  // done with (their replies' captures go now); the storage is kept
   // Commands whose radio latency has passed reach their robots now.
   while (const CommandEvent* c = radio_.NextDue(sim_time_ns_)) {
     Deliver(*c);

@@ -198,6 +198,7 @@ class WorldImpl {
   std::map<std::pair<int, int>, std::pair<std::shared_ptr<const RobotModel>, std::shared_ptr<const RobotModel>>>
       spec_models_;
   std::unique_ptr<ModelLoader> loader_;
+  std::vector<Event> drained_;      // this step's events (its storage goes back to the queue)
   std::size_t sent_hint_ = 0;       // FindRobot's hints for commands sent and delivered
   std::size_t delivered_hint_ = 0;
   std::uint64_t roster_version_ = 0;  // counts robots coming, going and rebuilt

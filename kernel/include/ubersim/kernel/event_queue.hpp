@@ -32,9 +32,15 @@ class EventQueue final : public EventSink {
   /// Takes every queued event, oldest first (simulation thread).
   std::vector<Event> Drain() {
     std::vector<Event> out;
+    Drain(out);
+    return out;
+  }
+  /// The same into `out` (its events dropped first), whose storage the queue keeps for the next
+  /// events: a caller draining every step into one vector allocates nothing once both have grown.
+  void Drain(std::vector<Event>& out) {
+    out.clear();
     std::lock_guard lock(mutex_);
     out.swap(pending_);
-    return out;
   }
 
  private:
