@@ -221,7 +221,9 @@ VisionFrame PerceptionPipeline::Frame(std::size_t index, const WorldSnapshot& tr
   // Noise grows away from the camera's nadir; every position shifts from the field's centre
   // towards the camera (none for a camera above the centre).
   const auto growth = [&](double x, double y) {
-    return 1.0 + model_.noise_growth * std::hypot(x - cam.position.x(), y - cam.position.y());
+    // Not std::hypot: its overflow guard costs ten times the arithmetic, for distances of metres.
+    const double dx = x - cam.position.x(), dy = y - cam.position.y();
+    return 1.0 + model_.noise_growth * std::sqrt(dx * dx + dy * dy);
   };
   Vec3 offset = Vec3::Zero();
   if (model_.object_offset > 0 && std::hypot(cam.position.x(), cam.position.y()) > 1e-6) {

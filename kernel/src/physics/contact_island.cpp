@@ -374,7 +374,7 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContact& newest, const
     linear[k] += dt * velocity_change[k];
     angular[k] += dt * velocity_change[3 + k];
   }
-  FinishBodyStep(body, inverse_mass, inverse_inertia, b.force, b.torque, linear, angular, dt);
+  FinishBodyStep(body, b.arrays, inverse_mass, inverse_inertia, b.force, b.torque, linear, angular, dt);
 }
 
 }  // namespace ubersim::kernel

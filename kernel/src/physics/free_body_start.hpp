@@ -19,6 +19,7 @@ struct FreeBodyStart {
   dVector3 angular{};               ///< angular velocity, rad/s
   dMatrix3 inverse_inertia{};       ///< world frame
   dReal inverse_mass = 0;           ///< 1/kg, as dBodySetMass stored it
+  BodyArrays arrays;                ///< the body's own velocity and accumulator arrays
 };
 
 /// Reads `body` under `gravity` (the world's, m/s²) as QuickStep's stage 0 does, operation for
@@ -27,15 +28,12 @@ inline void StartFreeBodyStep(dBodyID body, const dReal* gravity, InverseInertia
   dBodyGetMass(body, &s.mass);
   s.rotation = dBodyGetRotation(body);
   // Each getter once: they are calls into ODE, which the loop cannot hoist by itself.
-  const dReal* force = dBodyGetForce(body);
-  const dReal* torque = dBodyGetTorque(body);
-  const dReal* linear = dBodyGetLinearVel(body);
-  const dReal* angular = dBodyGetAngularVel(body);
+  s.arrays = BodyArrays::Of(body);
   for (int k = 0; k < 3; ++k) {
-    s.force[k] = force[k];
-    s.torque[k] = torque[k];
-    s.linear[k] = linear[k];
-    s.angular[k] = angular[k];
+    s.force[k] = s.arrays.force[k];
+    s.torque[k] = s.arrays.torque[k];
+    s.linear[k] = s.arrays.linear[k];
+    s.angular[k] = s.arrays.angular[k];
   }
   if (dBodyGetGravityMode(body)) {
     // Only the non-zero components: adding m·0 would turn a -0 force into +0.

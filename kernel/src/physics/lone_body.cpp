@@ -70,8 +70,8 @@ void AddImplicitGyroscopicTorque(const dMass& mass, const dReal* rotation, const
   }
 }
 
-void FinishBodyStep(dBodyID body, dReal inverse_mass, const dReal* inverse_inertia, const dReal* force,
-                    dReal* torque, dReal* linear, dReal* angular, dReal dt) {
+void FinishBodyStep(dBodyID body, const BodyArrays& arrays, dReal inverse_mass, const dReal* inverse_inertia,
+                    const dReal* force, dReal* torque, dReal* linear, dReal* angular, dReal dt) {
   // Velocities.
   const dReal impulse_per_force = dt * inverse_mass;
   for (int k = 0; k < 3; ++k) {
@@ -92,11 +92,12 @@ void FinishBodyStep(dBodyID body, dReal inverse_mass, const dReal* inverse_inert
   dDQfromW(dq, angular, q);
   for (int k = 0; k < 4; ++k) q[k] += dt * dq[k];
 
-  dBodySetLinearVel(body, linear[0], linear[1], linear[2]);
-  dBodySetAngularVel(body, angular[0], angular[1], angular[2]);
+  for (int k = 0; k < 3; ++k) {
+    arrays.linear[k] = linear[k];
+    arrays.angular[k] = angular[k];
+  }
   dBodySetQuaternion(body, q);
-  dBodySetForce(body, 0, 0, 0);
-  dBodySetTorque(body, 0, 0, 0);
+  for (int k = 0; k < 3; ++k) arrays.force[k] = arrays.torque[k] = 0;
 }
 
 void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
@@ -112,7 +113,7 @@ void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
   if (dBodyGetGyroscopicMode(body) && b.inverse_mass > 0 && !about_principal_vertical) {
     AddImplicitGyroscopicTorque(b.mass, rotation, b.angular, dt, b.torque);
   }
-  FinishBodyStep(body, b.inverse_mass, b.inverse_inertia, b.force, b.torque, b.linear, b.angular, dt);
+  FinishBodyStep(body, b.arrays, b.inverse_mass, b.inverse_inertia, b.force, b.torque, b.linear, b.angular, dt);
 }
 
 }  // namespace ubersim::kernel

@@ -42,12 +42,28 @@ class InverseInertiaCache {
 void AddImplicitGyroscopicTorque(const dMass& mass, const dReal* rotation, const dReal* angular, dReal dt,
                                  dReal* torque);
 
+/// A body's velocity and accumulator arrays in ODE's own storage (the pointers dBodyGetLinearVel,
+/// dBodyGetAngularVel, dBodyGetForce and dBodyGetTorque return): written in place, as the
+/// setters would, without a call each.
+struct BodyArrays {
+  dReal* linear = nullptr;   ///< linear velocity, m/s
+  dReal* angular = nullptr;  ///< angular velocity, rad/s
+  dReal* force = nullptr;    ///< accumulated force, N
+  dReal* torque = nullptr;   ///< accumulated torque, N·m
+  /// `body`'s.
+  static BodyArrays Of(dBodyID body) {
+    return {const_cast<dReal*>(dBodyGetLinearVel(body)), const_cast<dReal*>(dBodyGetAngularVel(body)),
+            const_cast<dReal*>(dBodyGetForce(body)), const_cast<dReal*>(dBodyGetTorque(body))};
+  }
+};
+
 /// The end of QuickStep's step of one body: `linear` and `angular` (its velocities so far) take
 /// `force` and `torque` over `dt` (torque through `inverse_inertia`, world frame), become the
-/// body's velocities, the pose follows, the geometries are told it moved, and the accumulators
-/// are cleared. `torque` is scaled by dt in place, as QuickStep does.
-void FinishBodyStep(dBodyID body, dReal inverse_mass, const dReal* inverse_inertia, const dReal* force,
-                    dReal* torque, dReal* linear, dReal* angular, dReal dt);
+/// body's velocities (written to `arrays`, the body's), the pose follows, the geometries are
+/// told it moved, and the accumulators are cleared. `torque` is scaled by dt in place, as
+/// QuickStep does.
+void FinishBodyStep(dBodyID body, const BodyArrays& arrays, dReal inverse_mass, const dReal* inverse_inertia,
+                    const dReal* force, dReal* torque, dReal* linear, dReal* angular, dReal dt);
 
 /// Steps lone bodies (IsLoneBody) the way ODE 0.16's QuickStep steps a one-body island without
 /// constraints, floating-point operation for floating-point operation: gravity, the implicit
