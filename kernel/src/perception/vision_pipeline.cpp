@@ -29,6 +29,34 @@ constexpr std::uint64_t kPhaseStream = 0x5048415345000003ULL;
 // area with (reference/ssl-protocols.md §6.2).
 constexpr double kFocalLengthPx = 390.0;
 
+// SplitMix64's finaliser (Steele, Lea and Flood 2014): a 64-bit value's bits mixed into all others.
+std::uint64_t Mix(std::uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+// The random numbers of one object in one camera frame: SplitMix64 from a key of the world's
+// seed, the camera, the frame and the object. An object's noise depends on nothing else, so a
+// camera draws only for what it sees (half the field, in Division A), and no object's drop-out,
+// coming into view or leaving shifts another's noise. A standard uniform random bit generator.
+class ObjectDraws {
+ public:
+  using result_type = std::uint64_t;
+  ObjectDraws(std::uint64_t frame_key, std::uint64_t object) : state_(Mix(frame_key ^ Mix(object))) {}
+  static constexpr result_type min() { return 0; }
+  static constexpr result_type max() { return ~result_type{0}; }
+  result_type operator()() { return Mix(state_ += 0x9e3779b97f4a7c15ULL); }
+
+ private:
+  std::uint64_t state_;
+};
+
+// The key of a robot's draws (the ball's is 0): its team and id, whatever its place in the list.
+std::uint64_t ObjectKey(const RobotId& id) {
+  return 1 + (static_cast<std::uint64_t>(id.team == Team::kBlue ? 0 : 1) << 32) + static_cast<std::uint32_t>(id.id);
+}
+
 // The area in pixels of a whole ball of `radius` at `at`, seen by a camera at `camera`.
 double BallDiscArea(const Vec3& camera, const Vec3& at, double radius) {
   const double disc_px = kFocalLengthPx * radius / std::max(0.1, (camera - at).norm());
@@ -214,6 +242,7 @@ VisionFrame PerceptionPipeline::Frame(std::size_t index, const WorldSnapshot& tr
   VisionFrame f;
   f.camera_id = cam.id;
   f.frame_number = frame_numbers_[index]++;
+  const std::uint64_t frame_key = Mix(Mix(Mix(seed_ ^ kVisionStream) ^ index) ^ f.frame_number);
   f.t_sent_ns = truth.sim_time_ns + latency_ns_;
   // The capture time the frame reports: the true one, or the sending time less the processing
   // time the league's presets give (which is shorter than the whole delay).
@@ -229,13 +258,16 @@ VisionFrame PerceptionPipeline::Frame(std::size_t index, const WorldSnapshot& tr
   if (model_.object_offset > 0 && std::hypot(cam.position.x(), cam.position.y()) > 1e-6) {
     offset = model_.object_offset * Vec3(cam.position.x(), cam.position.y(), 0.0).normalized();
   }
-  // Every random number is drawn whether or not it is used, so one object's drop-out does not
-  // shift the noise of everything after it; what a setting adds is drawn only when it is on.
+  // Each object's random numbers come from its own stream (ObjectDraws), drawn in a fixed order
+  // whether or not they are used; what a setting adds is drawn only when it is on.
   const BallState& b = truth.ball;
-  const double ball_noise_x = unit_noise(rng_), ball_noise_y = unit_noise(rng_);
-  const bool ball_lost = chance(rng_) < model_.ball_drop;
-  const double area_noise = model_.ball_area_sigma > 0 ? unit_noise(rng_) : 0.0;
-  if (Sees(cam, b.pose.position.x(), b.pose.position.y()) && !ball_lost) {
+  ObjectDraws ball_draws(frame_key, 0);
+  const bool ball_in_view = Sees(cam, b.pose.position.x(), b.pose.position.y());
+  const double ball_noise_x = ball_in_view ? unit_noise(ball_draws) : 0.0;
+  const double ball_noise_y = ball_in_view ? unit_noise(ball_draws) : 0.0;
+  const bool ball_lost = ball_in_view && chance(ball_draws) < model_.ball_drop;
+  const double area_noise = ball_in_view && model_.ball_area_sigma > 0 ? unit_noise(ball_draws) : 0.0;
+  if (ball_in_view && !ball_lost) {
     BallVisibility seen;
     seen.centroid = b.pose.position;
     if (model_.ball_occlusion) {
@@ -260,15 +292,18 @@ VisionFrame PerceptionPipeline::Frame(std::size_t index, const WorldSnapshot& tr
   }
   for (std::size_t i = 0; i < truth.robots.size(); ++i) {
     const RobotState& r = truth.robots[i];
-    const double nx = unit_noise(rng_), ny = unit_noise(rng_), nyaw = unit_noise(rng_);
-    const bool lost = chance(rng_) < model_.robot_drop;
+    if (!r.present || !Sees(cam, r.pose.position.x(), r.pose.position.y())) continue;
+    ObjectDraws draws(frame_key, ObjectKey(r.id));
+    const double nx = unit_noise(draws);
+    const double ny = unit_noise(draws);
+    const double nyaw = unit_noise(draws);
+    const bool lost = chance(draws) < model_.robot_drop;
     // A false ball at a corner of its dribbler: the light barrier's red diode, seen as a ball.
     bool false_ball = false, left_corner = false;
     if (model_.dribbler_false_balls > 0) {
-      false_ball = chance(rng_) < model_.dribbler_false_balls / model_.frame_rate;
-      left_corner = chance(rng_) < 0.5;
+      false_ball = chance(draws) < model_.dribbler_false_balls / model_.frame_rate;
+      left_corner = chance(draws) < 0.5;
     }
-    if (!r.present || !Sees(cam, r.pose.position.x(), r.pose.position.y())) continue;
     if (false_ball && i < front_distances.size()) {
       const double front = front_distances[i];
       const double side = std::sqrt(std::max(0.0, r.radius * r.radius - front * front)) * (left_corner ? 1 : -1);

@@ -269,5 +269,61 @@ TEST(Realism, WithEverythingOffTheFramesAreThoseOfBefore) {
   }
 }
 
+TEST(Realism, AnObjectsNoiseIsItsOwnWhoeverElseIsInView) {
+  // Each object draws from its own stream (the seed, the camera, the frame, the object): robot 5
+  // and the ball are reported alike whether robot 0, listed before them, is on the field, off it
+  // or in view. With one stream for the frame, robot 0's draws came first and moved theirs.
+  PerceptionModel m = Camera();
+  m.ball_position_sigma = 0.003;
+  m.robot_position_sigma = 0.002;
+  m.robot_orientation_sigma = 0.02;
+  m.robot_drop = 0.1;
+  const Vec3 ball(1, 1, kBallRadius);
+  const RobotState watched = RobotAt(-1, 0, 0.3, 5);
+  RobotState other = RobotAt(2, -1, 0.0, 0);
+  const auto run = [&](std::vector<RobotState> robots) {
+    PerceptionPipeline p(m, 7);
+    return Frames(p, 1.0, Scene(0, ball, std::move(robots)));
+  };
+  const auto alone = run({watched});
+  const auto with_other = run({other, watched});
+  other.present = false;
+  const auto with_other_off = run({other, watched});
+  ASSERT_EQ(alone.size(), 100u);
+  ASSERT_EQ(with_other.size(), alone.size());
+  ASSERT_EQ(with_other_off.size(), alone.size());
+  const auto report_of = [](const VisionFrame& f, int id) -> const DetectedRobot* {
+    for (const DetectedRobot& r : f.robots) {
+      if (r.id.id == id) return &r;
+    }
+    return nullptr;
+  };
+  int seen = 0, moved = 0;
+  for (std::size_t i = 0; i < alone.size(); ++i) {
+    for (const auto* frames : {&with_other, &with_other_off}) {
+      const VisionFrame& f = (*frames)[i];
+      ASSERT_EQ(f.balls.size(), 1u);
+      EXPECT_EQ(f.balls[0].x, alone[i].balls.at(0).x) << "frame " << i;
+      EXPECT_EQ(f.balls[0].y, alone[i].balls[0].y) << "frame " << i;
+      const DetectedRobot* a = report_of(alone[i], 5);
+      const DetectedRobot* b = report_of(f, 5);
+      ASSERT_EQ(a == nullptr, b == nullptr) << "frame " << i << ": dropped in one run only";
+      if (!a) continue;
+      ++seen;
+      EXPECT_EQ(b->x, a->x) << "frame " << i;
+      EXPECT_EQ(b->y, a->y) << "frame " << i;
+      EXPECT_EQ(b->yaw, a->yaw) << "frame " << i;
+    }
+    const DetectedRobot* r = report_of(alone[i], 5);
+    if (r && r->x != -1.0) ++moved;
+  }
+  EXPECT_GT(seen, 150);   // about 90 % of 2 × 100 frames
+  EXPECT_GT(moved, 80);   // and there is noise to compare
+  // Robot 0 in view has noise of its own, not robot 5's.
+  const DetectedRobot* zero = report_of(with_other[0], 0);
+  const DetectedRobot* five = report_of(with_other[0], 5);
+  if (zero && five) EXPECT_NE(zero->x - 2.0, five->x + 1.0);
+}
+
 }  // namespace
 }  // namespace ubersim::kernel
