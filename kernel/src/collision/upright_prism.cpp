@@ -98,6 +98,7 @@ bool LeastOverlap(const Outline& a, const Other& b, const Directions& d, Touch& 
   t.depth = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < d.count; ++i) {
     const double overlap = Overlap(a, b, d.unit[i]);
+    if (overlap <= 0.0) return false;  // a separating axis: the least can only be lower
     if (overlap < t.depth) {
       t.depth = overlap;
       t.n = d.unit[i];
@@ -191,6 +192,8 @@ bool TouchAt(const Outline& a, const Outline& b, Touch& t) {
   Directions d;
   auto add = [&](const V2& v) { d.Add(v); };
   add(b.centre - a.centre);
+  // Apart along the line of centres (most pairs a broadphase passes on): no need for the rest.
+  if (d.count > 0 && Overlap(a, b, d.unit[0]) <= 0.0) return false;
   if (a.has_face()) {
     add(a.forward);
     for (int k = 0; k < 2; ++k) {
