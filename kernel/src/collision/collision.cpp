@@ -279,6 +279,7 @@ void CollisionManager::Refile() {
   hulls_found_ = false;
   hulls_.clear();
   hull_slack_.clear();
+  hull_arrays_.clear();
   hull_touching_.clear();
   surfaces_.clear();
   ++surfaces_epoch_;
@@ -739,6 +740,8 @@ void CollisionManager::SweepRobots() {
       if (g.hull() && g.prism() && g.body()) {
         hulls_.push_back(&g);
         hull_slack_.push_back(OffsetDistance(g));
+        const dBodyID body = g.body()->id();
+        hull_arrays_.push_back({dBodyGetPosition(body), dBodyGetLinearVel(body), dBodyGetAngularVel(body)});
       }
     });
     hulls_found_ = true;
@@ -750,10 +753,10 @@ void CollisionManager::SweepRobots() {
     if (!g->collides()) continue;
     // The body's position, not the shell's: the shell's pose is computed only for pairs that
     // pass these bounds (each grown by how far the shell's centre may lie from the body's).
-    const dReal* p = dBodyGetPosition(g->body()->id());
+    const dReal* p = hull_arrays_[h].position;
     const double slack = hull_slack_[h];
-    const dReal* v = dBodyGetLinearVel(g->body()->id());
-    const dReal* w = dBodyGetAngularVel(g->body()->id());
+    const dReal* v = hull_arrays_[h].linear;
+    const dReal* w = hull_arrays_[h].angular;
     const Vec3 velocity(v[0], v[1], v[2]);
     const double rim = std::abs(w[2]) * g->prism()->radius;
     swept_.push_back({g, p[0], p[1], velocity, rim, g->prism()->radius,
