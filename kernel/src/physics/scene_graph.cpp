@@ -33,7 +33,11 @@ BodyImpl::BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumula
       mass_(spec.mass.mass),
       body_(dBodyCreate(world)),
       accumulations_(&accumulations),
-      serial_(serial) {
+      serial_(serial),
+      position_(dBodyGetPosition(body_.get())),
+      quaternion_(dBodyGetQuaternion(body_.get())),
+      linear_(dBodyGetLinearVel(body_.get())),
+      angular_(dBodyGetAngularVel(body_.get())) {
   const MassSpec& m = spec.mass;
   if (!(m.mass > 0.0) || !std::isfinite(m.mass)) {
     throw PluginError("body '" + spec.name + "': mass must be positive and finite");
@@ -85,7 +89,7 @@ void BodyImpl::AddFixedMass(const MassSpec& part, const Pose& at) {
 }
 
 Pose BodyImpl::GetPose() const {
-  return Pose{ToVec3(dBodyGetPosition(body_.get())), ToQuat(dBodyGetQuaternion(body_.get()))};
+  return Pose{ToVec3(position_), ToQuat(quaternion_)};
 }
 
 void BodyImpl::SetPose(const Pose& pose) {
@@ -96,7 +100,7 @@ void BodyImpl::SetPose(const Pose& pose) {
 }
 
 Twist BodyImpl::GetTwist() const {
-  return Twist{ToVec3(dBodyGetLinearVel(body_.get())), ToVec3(dBodyGetAngularVel(body_.get()))};
+  return Twist{ToVec3(linear_), ToVec3(angular_)};
 }
 
 void BodyImpl::SetTwist(const Twist& t) {

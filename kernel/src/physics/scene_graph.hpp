@@ -56,6 +56,12 @@ class BodyImpl final : public Body {
   OdeBody body_;
   std::uint64_t* accumulations_;  // the scene graph's
   std::uint64_t serial_;
+  // ODE's own arrays for the body (what its getters return, fixed for its life): a pose or a
+  // twist read is a copy, not two calls into ODE.
+  const dReal* position_;
+  const dReal* quaternion_;
+  const dReal* linear_;
+  const dReal* angular_;
 };
 
 /// A geometry owned by a node, with its surface, optional directional friction and observers.
