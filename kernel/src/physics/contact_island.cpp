@@ -284,7 +284,7 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContact& newest, const
   FreeBodyStart b;
   StartFreeBodyStep(body, gravity, inverse_inertia_, b);
   if (dBodyGetGyroscopicMode(body) && b.inverse_mass > 0) {
-    AddImplicitGyroscopicTorque(b.mass, b.rotation, b.angular, dt, b.torque);
+    AddImplicitGyroscopicTorque(*b.mass, b.rotation, b.angular, dt, b.torque);
   }
   const dReal inverse_mass = b.inverse_mass;
   const dReal* inverse_inertia = b.inverse_inertia;

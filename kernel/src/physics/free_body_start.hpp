@@ -11,7 +11,7 @@ namespace ubersim::kernel {
 /// A body's state as QuickStep's stage 0 leaves it: gravity in the force, the world-frame inverse
 /// inertia, the velocities read.
 struct FreeBodyStart {
-  dMass mass{};
+  const dMass* mass = nullptr;      ///< the body's mass parameters (InverseInertiaCache::Of)
   const dReal* rotation = nullptr;  ///< the body's, ODE's 3×4
   dVector3 force{};                 ///< the accumulated force, gravity added, N
   dVector3 torque{};                ///< the accumulated torque, N·m
@@ -25,7 +25,8 @@ struct FreeBodyStart {
 /// Reads `body` under `gravity` (the world's, m/s²) as QuickStep's stage 0 does, operation for
 /// operation; the gyroscopic torque is left to the caller.
 inline void StartFreeBodyStep(dBodyID body, const dReal* gravity, InverseInertiaCache& cache, FreeBodyStart& s) {
-  dBodyGetMass(body, &s.mass);
+  const BodyMass m = cache.Of(body);
+  s.mass = m.mass;
   s.rotation = dBodyGetRotation(body);
   // Each getter once: they are calls into ODE, which the loop cannot hoist by itself.
   s.arrays = BodyArrays::Of(body);
@@ -38,13 +39,13 @@ inline void StartFreeBodyStep(dBodyID body, const dReal* gravity, InverseInertia
   if (dBodyGetGravityMode(body)) {
     // Only the non-zero components: adding m·0 would turn a -0 force into +0.
     for (int k = 0; k < 3; ++k) {
-      if (gravity[k] != 0) s.force[k] += s.mass.mass * gravity[k];
+      if (gravity[k] != 0) s.force[k] += s.mass->mass * gravity[k];
     }
   }
   dMatrix3 tmp = {};
-  dMultiply2_333(tmp, cache.Of(body, s.mass), s.rotation);
+  dMultiply2_333(tmp, m.inverse_inertia, s.rotation);
   dMultiply0_333(s.inverse_inertia, s.rotation, tmp);
-  s.inverse_mass = dRecip(s.mass.mass);
+  s.inverse_mass = m.inverse_mass;
 }
 
 }  // namespace ubersim::kernel

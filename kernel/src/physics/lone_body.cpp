@@ -18,7 +18,17 @@ bool IsLoneBody(dBodyID body) {
   return dBodyGetJoint(body, 0) == nullptr && StepsAsQuickStepsAFreeBody(body);
 }
 
-const dReal* InverseInertiaCache::Of(dBodyID body, const dMass& mass) {
+namespace {
+
+// What dBodySetMass stores as the inverse of `inertia`: the Cholesky inverse, or the identity
+// for an inertia that is not positive definite.
+void InverseOf(const dMatrix3 inertia, dMatrix3 inverse) {
+  if (dInvertPDMatrix(inertia, inverse, 3) == 0) dRSetIdentity(inverse);
+}
+
+}  // namespace
+
+BodyMass InverseInertiaCache::Of(dBodyID body) {
   std::size_t at = next_ < entries_.size() && entries_[next_].body == body ? next_ : entries_.size();
   if (at == entries_.size()) {
     at = 0;
@@ -28,20 +38,37 @@ const dReal* InverseInertiaCache::Of(dBodyID body, const dMass& mass) {
         entries_.clear();
         at = 0;
       }
-      entries_.push_back(Entry{body, {}, {}});
+      // First sight: does ODE's own storage, right before the position, hold this body's mass,
+      // inverse inertia and inverse mass? (A body ODE reuses the memory of has the same layout.)
+      Entry e{body, false, {}, {}, {}};
+      dBodyGetMass(body, &e.mass);
+      const dReal* position = dBodyGetPosition(body);
+      const dReal* inverse_mass = position - 1;
+      const dReal* inverse = inverse_mass - 12;
+      const auto* mass = reinterpret_cast<const dMass*>(inverse - sizeof(dMass) / sizeof(dReal));
+      InverseOf(e.mass.I, e.inverse);
+      const dReal expected_inverse_mass = dRecip(e.mass.mass);
+      e.in_place = std::memcmp(mass, &e.mass, sizeof(dMass)) == 0 &&
+                   std::memcmp(inverse, e.inverse, sizeof(dMatrix3)) == 0 &&
+                   std::memcmp(inverse_mass, &expected_inverse_mass, sizeof(dReal)) == 0;
+      std::memcpy(e.inertia, e.mass.I, sizeof e.inertia);
+      entries_.push_back(e);
     }
   }
   next_ = at + 1;
-  // Cached per body and checked against the inertia it came from: a pure function of it, so a
-  // body ID ODE reuses for a new body finds either the right inverse or a stale one it replaces.
-  Entry& cached = entries_[at];
-  if (std::memcmp(cached.inertia, mass.I, sizeof mass.I) != 0 || cached.inverse[0] == 0) {
-    std::memcpy(cached.inertia, mass.I, sizeof mass.I);
-    // What dBodySetMass stored: the Cholesky inverse, or the identity for an inertia that is
-    // not positive definite.
-    if (dInvertPDMatrix(mass.I, cached.inverse, 3) == 0) dRSetIdentity(cached.inverse);
+  Entry& e = entries_[at];
+  if (e.in_place) {
+    const dReal* inverse_mass = dBodyGetPosition(body) - 1;
+    const dReal* inverse = inverse_mass - 12;
+    return {reinterpret_cast<const dMass*>(inverse - sizeof(dMass) / sizeof(dReal)), inverse, *inverse_mass};
   }
-  return cached.inverse;
+  // Checked against the inertia it came from: a pure function of it.
+  dBodyGetMass(body, &e.mass);
+  if (std::memcmp(e.inertia, e.mass.I, sizeof e.inertia) != 0) {
+    std::memcpy(e.inertia, e.mass.I, sizeof e.inertia);
+    InverseOf(e.mass.I, e.inverse);
+  }
+  return {&e.mass, e.inverse, dRecip(e.mass.mass)};
 }
 
 // The order of every operation below is QuickStep's (quickstep.cpp, stages 0 and 6, and
@@ -109,9 +136,9 @@ void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
   // rate, so here the stepper agrees with QuickStep to rounding, not to the bit.
   const dReal* rotation = b.rotation;
   const bool about_principal_vertical = b.angular[0] == 0 && b.angular[1] == 0 && rotation[8] == 0 &&
-                                        rotation[9] == 0 && b.mass.I[2] == 0 && b.mass.I[6] == 0;
+                                        rotation[9] == 0 && b.mass->I[2] == 0 && b.mass->I[6] == 0;
   if (dBodyGetGyroscopicMode(body) && b.inverse_mass > 0 && !about_principal_vertical) {
-    AddImplicitGyroscopicTorque(b.mass, rotation, b.angular, dt, b.torque);
+    AddImplicitGyroscopicTorque(*b.mass, rotation, b.angular, dt, b.torque);
   }
   FinishBodyStep(body, b.arrays, b.inverse_mass, b.inverse_inertia, b.force, b.torque, b.linear, b.angular, dt);
 }

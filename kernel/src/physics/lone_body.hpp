@@ -19,20 +19,33 @@ bool IsLoneBody(dBodyID body);
 /// leave to ODE (finite rotation, damping, a cap on the angular speed); its joints aside.
 bool StepsAsQuickStepsAFreeBody(dBodyID body);
 
-/// The body-frame inverse inertia ODE derived in dBodySetMass, per body, cached.
+/// A body's mass as QuickStep reads it: the mass parameters, the body-frame inverse inertia and
+/// the inverse mass dBodySetMass stored.
+struct BodyMass {
+  const dMass* mass = nullptr;              ///< mass, centre, inertia (body frame)
+  const dReal* inverse_inertia = nullptr;   ///< the inverse of mass->I, a 3×4 ODE matrix
+  dReal inverse_mass = 0;                   ///< 1/kg
+};
+
+/// BodyMass per body. ODE keeps all three in the body, right before its position (every ODE
+/// since 0.11 lays out dxBody as mass, invI, invMass, posr): read there, after checking once per
+/// body that what lies there is what dBodyGetMass and dBodySetMass's inverse give, bit for bit.
+/// Where it is not (another layout), the inverse is computed and cached as dBodySetMass does.
 class InverseInertiaCache {
  public:
-  /// The inverse of `mass.I` as dBodySetMass stored it for `body` (a 3×4 ODE matrix).
-  const dReal* Of(dBodyID body, const dMass& mass);
+  /// `body`'s mass, inverse inertia and inverse mass, as dBodySetMass stored them.
+  BodyMass Of(dBodyID body);
 
  private:
   struct Entry {
     dBodyID body;
+    bool in_place;      // ODE's own storage checked: read there
+    dMass mass;         // else: a copy, and the inverse of its inertia
     dMatrix3 inertia;
     dMatrix3 inverse;
   };
   // A step asks for the same bodies in the same order as the step before: the entry after the
-  // last one found is looked at first (a hash map's lookup was a tenth of a lone body's step).
+  // last one found is looked at first.
   std::vector<Entry> entries_;
   std::size_t next_ = 0;
 };

@@ -216,4 +216,39 @@ TEST(IsLoneBody, LeavesToOdeWhatTheStepperDoesNotReproduce) {
   }
 }
 
+TEST(InverseInertiaCache, GivesTheMassOdeStoredAndFollowsANewOne) {
+  // The cache reads a body's mass, inverse inertia and inverse mass where ODE keeps them: they
+  // must be what dBodyGetMass and dBodySetMass's inverse give, and stay so when the mass changes.
+  OdeLibrary ode;
+  OdeWorld world = MakeWorld();
+  std::mt19937_64 rng(11);
+  ubersim::kernel::InverseInertiaCache cache;
+  std::vector<dBodyID> bodies;
+  for (int i = 0; i < 5; ++i) bodies.push_back(MakeTwin(world.get(), world.get(), rng, i).kernel);
+  const auto expect_ode_mass = [&](dBodyID b, const char* when) {
+    dMass m;
+    dBodyGetMass(b, &m);
+    dMatrix3 inverse;
+    if (dInvertPDMatrix(m.I, inverse, 3) == 0) dRSetIdentity(inverse);
+    const ubersim::kernel::BodyMass got = cache.Of(b);
+    EXPECT_EQ(std::memcmp(got.mass, &m, sizeof m), 0) << when;
+    for (int k = 0; k < 12; ++k) {
+      if (k % 4 != 3) EXPECT_EQ(got.inverse_inertia[k], inverse[k]) << when << ", element " << k;
+    }
+    EXPECT_EQ(got.inverse_mass, dRecip(m.mass)) << when;
+  };
+  for (int round = 0; round < 2; ++round) {
+    for (dBodyID b : bodies) expect_ode_mass(b, "as made");
+  }
+  dMass heavier;
+  dMassSetBoxTotal(&heavier, 7.5, 0.3, 0.1, 0.05);
+  dBodySetMass(bodies[2], &heavier);
+  for (dBodyID b : bodies) expect_ode_mass(b, "after a new mass");
+  EXPECT_EQ(cache.Of(bodies[2]).mass->mass, 7.5);
+  // With Debian's ODE (0.16.2: dxBody holds mass, invI, invMass, then the position) the values
+  // are read in place, not from the cache's fallback copy.
+  EXPECT_EQ(cache.Of(bodies[0]).inverse_inertia + 12, dBodyGetPosition(bodies[0]) - 1)
+      << "ODE's body layout is not the one the cache reads: it falls back to computing the inverse";
+}
+
 }  // namespace
