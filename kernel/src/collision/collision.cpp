@@ -9,6 +9,18 @@
 namespace ubersim::kernel {
 namespace {
 
+// Sorts `order` (indices) by `before` in place, by insertion: the orders the broadphases keep from
+// step to step are nearly sorted already, and std::sort would start over.
+template <typename Before>
+void InsertionSort(std::vector<std::size_t>& order, const Before& before) {
+  for (std::size_t i = 1; i < order.size(); ++i) {
+    const std::size_t moving = order[i];
+    std::size_t j = i;
+    for (; j > 0 && before(moving, order[j - 1]); --j) order[j] = order[j - 1];
+    order[j] = moving;
+  }
+}
+
 bool IsAncestorOrSelf(const NodeImpl* maybe_ancestor, const NodeImpl* node) {
   for (const NodeImpl* n = node; n; n = n->parent()) {
     if (n == maybe_ancestor) return true;
@@ -279,7 +291,6 @@ void CollisionManager::Refile() {
   hulls_found_ = false;
   hulls_.clear();
   hull_slack_.clear();
-  hull_arrays_.clear();
   hull_touching_.clear();
   surfaces_.clear();
   ++surfaces_epoch_;
@@ -620,16 +631,10 @@ void CollisionManager::ForEachFieldPair(F& f) {
   }
   // Sorted by the boxes' low x, ties by index: one order for one state, whatever the order was
   // the step before (a restored world pairs as the original). Nearly sorted already: insertion.
-  const auto before = [this](std::size_t a, std::size_t b) {
+  InsertionSort(field_order_, [this](std::size_t a, std::size_t b) {
     const double xa = field_groups_[a].lo[0], xb = field_groups_[b].lo[0];
     return xa < xb || (xa == xb && a < b);
-  };
-  for (std::size_t i = 1; i < field_order_.size(); ++i) {
-    const std::size_t moving = field_order_[i];
-    std::size_t j = i;
-    for (; j > 0 && before(moving, field_order_[j - 1]); --j) field_order_[j] = field_order_[j - 1];
-    field_order_[j] = moving;
-  }
+  });
   const auto pair_up = [&f](GeomImpl& a, GeomImpl& b) {
     if (MayCollide(a, b) && AabbsOverlap(a.id(), b.id())) f(a, b);
   };
@@ -740,8 +745,6 @@ void CollisionManager::SweepRobots() {
       if (g.hull() && g.prism() && g.body()) {
         hulls_.push_back(&g);
         hull_slack_.push_back(OffsetDistance(g));
-        const dBodyID body = g.body()->id();
-        hull_arrays_.push_back({dBodyGetPosition(body), dBodyGetLinearVel(body), dBodyGetAngularVel(body)});
       }
     });
     hulls_found_ = true;
@@ -753,10 +756,11 @@ void CollisionManager::SweepRobots() {
     if (!g->collides()) continue;
     // The body's position, not the shell's: the shell's pose is computed only for pairs that
     // pass these bounds (each grown by how far the shell's centre may lie from the body's).
-    const dReal* p = hull_arrays_[h].position;
+    const BodyImpl& body = *g->body();
+    const dReal* p = body.position_array();
     const double slack = hull_slack_[h];
-    const dReal* v = hull_arrays_[h].linear;
-    const dReal* w = hull_arrays_[h].angular;
+    const dReal* v = body.linear_array();
+    const dReal* w = body.angular_array();
     const Vec3 velocity(v[0], v[1], v[2]);
     const double rim = std::abs(w[2]) * g->prism()->radius;
     swept_.push_back({g, p[0], p[1], velocity, rim, g->prism()->radius,
@@ -772,15 +776,9 @@ void CollisionManager::SweepRobots() {
     swept_order_.resize(swept_.size());
     for (std::size_t i = 0; i < swept_order_.size(); ++i) swept_order_[i] = i;
   }
-  const auto before = [this](std::size_t a, std::size_t b) {
+  InsertionSort(swept_order_, [this](std::size_t a, std::size_t b) {
     return swept_[a].x < swept_[b].x || (swept_[a].x == swept_[b].x && a < b);
-  };
-  for (std::size_t i = 1; i < swept_order_.size(); ++i) {
-    const std::size_t moving = swept_order_[i];
-    std::size_t j = i;
-    for (; j > 0 && before(moving, swept_order_[j - 1]); --j) swept_order_[j] = swept_order_[j - 1];
-    swept_order_[j] = moving;
-  }
+  });
   swept_pairs_.clear();
   for (std::size_t u = 0; u < swept_order_.size(); ++u) {
     const std::size_t i = swept_order_[u];

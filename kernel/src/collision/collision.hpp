@@ -319,12 +319,6 @@ class CollisionManager {
   std::vector<std::pair<std::size_t, std::size_t>> swept_pairs_;  // within reach along x
   bool hulls_found_ = false;
   std::vector<double> hull_slack_;  // SweptHull::slack of each of hulls_
-  struct HullBodyArrays {
-    const dReal* position;
-    const dReal* linear;
-    const dReal* angular;
-  };
-  std::vector<HullBodyArrays> hull_arrays_;  // each of hulls_' body's, in ODE's storage
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> hull_touching_;  // this step's shell pairs
   std::vector<dBodyID> robots_in_contact_;  // this step's chassis touching another robot
   std::vector<double> approach_;            // SweepRobots' per-contact approach speeds

@@ -76,9 +76,9 @@ std::vector<bool> RadioLink::ResponsesLost(std::size_t robots) {
 
 std::vector<CommandEvent> RadioLink::Deliver(std::int64_t now_ns) {
   std::vector<CommandEvent> out;
-  while (!queue_.empty() && queue_.front().first <= now_ns) {
+  while (NextDue(now_ns)) {
     out.push_back(std::move(queue_.front().second));
-    queue_.pop_front();
+    PopDue();
   }
   return out;
 }

@@ -26,6 +26,14 @@ void InverseOf(const dMatrix3 inertia, dMatrix3 inverse) {
   if (dInvertPDMatrix(inertia, inverse, 3) == 0) dRSetIdentity(inverse);
 }
 
+// Where ODE keeps `body`'s mass, inverse inertia and inverse mass if its dxBody is laid out as
+// mass, invI, invMass, then the position (InverseInertiaCache checks that it is).
+BodyMass StoredIn(dBodyID body) {
+  const dReal* inverse_mass = dBodyGetPosition(body) - 1;
+  const dReal* inverse = inverse_mass - 12;
+  return {reinterpret_cast<const dMass*>(inverse - sizeof(dMass) / sizeof(dReal)), inverse, *inverse_mass};
+}
+
 }  // namespace
 
 BodyMass InverseInertiaCache::Of(dBodyID body) {
@@ -42,26 +50,19 @@ BodyMass InverseInertiaCache::Of(dBodyID body) {
       // inverse inertia and inverse mass? (A body ODE reuses the memory of has the same layout.)
       Entry e{body, false, {}, {}, {}};
       dBodyGetMass(body, &e.mass);
-      const dReal* position = dBodyGetPosition(body);
-      const dReal* inverse_mass = position - 1;
-      const dReal* inverse = inverse_mass - 12;
-      const auto* mass = reinterpret_cast<const dMass*>(inverse - sizeof(dMass) / sizeof(dReal));
       InverseOf(e.mass.I, e.inverse);
+      const BodyMass stored = StoredIn(body);
       const dReal expected_inverse_mass = dRecip(e.mass.mass);
-      e.in_place = std::memcmp(mass, &e.mass, sizeof(dMass)) == 0 &&
-                   std::memcmp(inverse, e.inverse, sizeof(dMatrix3)) == 0 &&
-                   std::memcmp(inverse_mass, &expected_inverse_mass, sizeof(dReal)) == 0;
+      e.in_place = std::memcmp(stored.mass, &e.mass, sizeof(dMass)) == 0 &&
+                   std::memcmp(stored.inverse_inertia, e.inverse, sizeof(dMatrix3)) == 0 &&
+                   std::memcmp(&stored.inverse_mass, &expected_inverse_mass, sizeof(dReal)) == 0;
       std::memcpy(e.inertia, e.mass.I, sizeof e.inertia);
       entries_.push_back(e);
     }
   }
   next_ = at + 1;
   Entry& e = entries_[at];
-  if (e.in_place) {
-    const dReal* inverse_mass = dBodyGetPosition(body) - 1;
-    const dReal* inverse = inverse_mass - 12;
-    return {reinterpret_cast<const dMass*>(inverse - sizeof(dMass) / sizeof(dReal)), inverse, *inverse_mass};
-  }
+  if (e.in_place) return StoredIn(body);
   // Checked against the inertia it came from: a pure function of it.
   dBodyGetMass(body, &e.mass);
   if (std::memcmp(e.inertia, e.mass.I, sizeof e.inertia) != 0) {

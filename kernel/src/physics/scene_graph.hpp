@@ -42,6 +42,11 @@ class BodyImpl final : public Body {
 
   /// The ODE body.
   dBodyID id() const { return body_.get(); }
+  /// ODE's own position, linear and angular velocity arrays for the body (what dBodyGetPosition,
+  /// dBodyGetLinearVel and dBodyGetAngularVel return), fixed for its life.
+  const dReal* position_array() const { return position_; }
+  const dReal* linear_array() const { return linear_; }    ///< see position_array
+  const dReal* angular_array() const { return angular_; }  ///< see position_array
   /// How many calls, on any body of its scene graph, have added to a linear velocity, force or
   /// torque: the only SDK writes whose result can be non-finite with finite arguments (an
   /// overflowing sum). One counter for the graph, so a check reads one number.

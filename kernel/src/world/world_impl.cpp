@@ -429,10 +429,8 @@ bool SpecIsEmpty(const RobotSpec& s) {
 }  // namespace
 
 Robot* WorldImpl::FindRobot(const RobotId& id) const {
-  for (const auto& r : robots_) {
-    if (r->id() == id) return r.get();
-  }
-  return nullptr;
+  std::size_t no_hint = robots_.size();
+  return FindRobot(id, no_hint);
 }
 
 Robot* WorldImpl::FindRobot(const RobotId& id, std::size_t& hint) const {
