@@ -336,10 +336,10 @@ class OmniForceDrive final : public ubersim::Drive {
   double distance_ = 0.08;
   double max_torque_ = 0.5;
   double max_wheel_speed_ = 150;
-  double servo_scale_ = 1.0;
+  double servo_scale_ = 1.0;   // of each wheel's share of the mass in its servo force (<1: wheels far out)
   double mu_roll_ = 0.8;       // wheel-carpet friction along the rolling direction (the world's)
   double mu_axle_ = 0.05;      // along the axle (the rollers)
-  double rest_height_ = 0.0;   // m, the centre of mass' height standing on the carpet   // of each wheel's share of the mass in its servo force (<1: wheels far out)
+  double rest_height_ = 0.0;   // m, the centre of mass' height standing on the carpet
   ubersim::VelocityServo servo_;       // the (forward, left, angular) setpoint the wheels follow
   ubersim::GyroRateLoop gyro_;  // heading hold on the measured turn rate
   ubersim::CommandWatchdog watchdog_{0.1};
