@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "physics/contact_island.hpp"
 
+#include <cstdint>
 #include <utility>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
+#include "physics/contact_rows.hpp"
 #include "physics/free_body_start.hpp"
 
 namespace ubersim::kernel {
@@ -81,29 +83,41 @@ StaticContactLog::BodyContacts& StaticContactLog::Of(dBodyID body) {
   return bodies_.back();
 }
 
-void StaticContactLog::MakeJoint(const StaticContact& c) {
-  dJointAttach(dJointCreateContact(world_, group_, &c.contact), c.reversed ? nullptr : c.body,
-               c.reversed ? c.body : nullptr);
+void StaticContactLog::MakeJoint(std::size_t index) {
+  const LoggedContact& c = contacts_[index];
+  dJointID joint = dJointCreateContact(world_, group_, &c.contact);
+  // The contact's place in the log, plus one: a joint's data is null until set.
+  dJointSetData(joint, reinterpret_cast<void*>(static_cast<std::uintptr_t>(index + 1)));
+  if (c.other) {
+    dJointAttach(joint, c.body, c.other);
+  } else {
+    dJointAttach(joint, c.reversed ? nullptr : c.body, c.reversed ? c.body : nullptr);
+  }
 }
 
 void StaticContactLog::Make(const dContact& contact, dBodyID a, dBodyID b) {
-  if (!keep_ || (a && b)) {
-    if (keep_) {
-      Join(a);
-      Join(b);
-    }
+  if (!keep_) {
     dJointAttach(dJointCreateContact(world_, group_, &contact), a, b);
+    return;
+  }
+  if (a && b) {
+    Join(a);
+    Join(b);
+    LoggedContact& linked = contacts_.emplace_back(contact);
+    linked.body = a;
+    linked.other = b;
+    MakeJoint(contacts_.size() - 1);
     return;
   }
   dBodyID body = a ? a : b;
   BodyContacts& owner = Of(body);
   // Built in place: a contact is 300 bytes, and a temporary would copy it twice.
-  StaticContact& kept = contacts_.emplace_back(contact);
+  LoggedContact& kept = contacts_.emplace_back(contact);
   kept.body = body;
   kept.reversed = a == nullptr;
   kept.previous = owner.newest;
   owner.newest = static_cast<int>(contacts_.size()) - 1;
-  if (owner.joined) MakeJoint(contacts_.back());
+  if (owner.joined) MakeJoint(contacts_.size() - 1);
 }
 
 void StaticContactLog::Join(dBodyID body) {
@@ -112,11 +126,18 @@ void StaticContactLog::Join(dBodyID body) {
   owner.joined = true;
   // Oldest first: the log holds every body's contacts in the order they came.
   for (int i = 0; i <= owner.newest; ++i) {
-    if (contacts_[static_cast<std::size_t>(i)].body == body) MakeJoint(contacts_[static_cast<std::size_t>(i)]);
+    const LoggedContact& c = contacts_[static_cast<std::size_t>(i)];
+    if (c.body == body && !c.other) MakeJoint(static_cast<std::size_t>(i));
   }
 }
 
-const StaticContact* StaticContactLog::Kept(dBodyID body) const {
+const LoggedContact* StaticContactLog::Made(dJointID joint) const {
+  const auto tag = reinterpret_cast<std::uintptr_t>(dJointGetData(joint));
+  if (tag == 0 || tag > contacts_.size() || dJointGetType(joint) != dJointTypeContact) return nullptr;
+  return &contacts_[tag - 1];
+}
+
+const LoggedContact* StaticContactLog::Kept(dBodyID body) const {
   for (const BodyContacts& b : bodies_) {
     if (b.body == body) return b.joined || b.newest < 0 ? nullptr : &contacts_[static_cast<std::size_t>(b.newest)];
   }
@@ -127,150 +148,21 @@ bool IsStaticContactIsland(dBodyID body, const StaticContactLog& log) {
   return IsStaticContactIsland(body, log.Kept(body));
 }
 
-bool IsStaticContactIsland(dBodyID body, const StaticContact* kept) {
+bool IsStaticContactIsland(dBodyID body, const LoggedContact* kept) {
   return kept && dBodyGetJoint(body, 0) == nullptr && StepsAsQuickStepsAFreeBody(body);
 }
 
 // Everything below follows ODE 0.16's order of operations (joints/contact.cpp, quickstep.cpp)
 // with ODE's own inline helpers: any other order changes the last bits.
-void ContactIslandStepper::AddContactRows(const StaticContact& sc, const dReal* position, const dReal* linear,
+void ContactIslandStepper::AddContactRows(const LoggedContact& sc, const dReal* position, const dReal* linear,
                                           const dReal* angular, const ContactSolverSettings& settings, dReal fps) {
-  const dContact& c = sc.contact;
-  dSurfaceParameters s = c.surface;  // getInfo1 clamps the friction coefficients in place
-  const int mode = s.mode;
-
-  // getInfo1: the row count, the friction coefficients made non-negative.
-  int m = 1;
-  if (mode & dContactAxisDep) {
-    if (s.mu < 0) {
-      s.mu = 0;
-    } else if (s.mu > 0) {
-      ++m;
-    }
-    if (s.mu2 < 0) {
-      s.mu2 = 0;
-    } else if (s.mu2 > 0) {
-      ++m;
-    }
-    if (mode & dContactRolling) {
-      for (dReal* rho : {&s.rho, &s.rho2, &s.rhoN}) {
-        if (*rho < 0) {
-          *rho = 0;
-        } else {
-          ++m;
-        }
-      }
-    }
-  } else {
-    if (s.mu < 0) {
-      s.mu = 0;
-    } else if (s.mu > 0) {
-      m += 2;
-    }
-    if (mode & dContactRolling) {
-      if (s.rho < 0) {
-        s.rho = 0;
-      } else {
-        m += 3;
-      }
-    }
-  }
-
-  // QuickStep's blank rows, then getInfo2 for a joint whose second body is the static world.
+  dSurfaceParameters s = sc.contact.surface;  // getInfo1 clamps the friction coefficients in place
+  const int m = ContactRowCount(s);
   const std::size_t first = row_count_;
   row_count_ += static_cast<std::size_t>(m);
   if (rows_.size() < row_count_) rows_.resize(2 * row_count_);  // grown, never shrunk: no per-step fill
-  Row* row = &rows_[first];
-  for (int i = 0; i < m; ++i) {
-    for (dReal& v : row[i].j) v = 0;
-    row[i].rhs = 0;
-    row[i].cfm = settings.cfm;
-    row[i].lo = -dInfinity;
-    row[i].hi = dInfinity;
-    row[i].findex = -1;
-  }
-
-  const dReal erp = (mode & dContactSoftERP) ? s.soft_erp : settings.erp;
-  const dReal k = fps * erp;
-  dReal depth = c.geom.depth - settings.surface_layer;
-  if (depth < 0) depth = 0;
-  const dReal motion_n = (mode & dContactMotionN) ? s.motionN : REAL(0.0);
-  const dReal pushout = k * depth + motion_n;
-  const bool apply_bounce = (mode & dContactBounce) && s.bounce_vel >= 0;
-  dReal outgoing = 0;
-  const dReal max_vel = settings.max_correcting_velocity;
-  dReal rhs = pushout > max_vel ? max_vel : pushout;
-
-  dVector3 normal;
-  if (sc.reversed) {
-    dCopyNegatedVector3(normal, c.geom.normal);
-  } else {
-    dCopyVector3(normal, c.geom.normal);
-  }
-  dVector3 c1;
-  dSubtractVectors3(c1, c.geom.pos, position);
-  dCopyVector3(row[0].j, normal);
-  dCalcVectorCross3(row[0].j + 3, c1, normal);
-  if (apply_bounce) {
-    outgoing += dCalcVectorDot3(row[0].j + 3, angular) + dCalcVectorDot3(normal, linear);
-    const dReal negated_outgoing = motion_n - outgoing;
-    if (negated_outgoing > s.bounce_vel) {
-      const dReal bounced = s.bounce * negated_outgoing + motion_n;
-      if (bounced > rhs) rhs = bounced;
-    }
-  }
-  row[0].rhs = rhs;
-  if (mode & dContactSoftCFM) row[0].cfm = s.soft_cfm;
-  row[0].lo = 0;
-  row[0].hi = dInfinity;
-
-  if (m > 1) {
-    dVector3 t1, t2;
-    if (mode & dContactFDir1) {
-      dCopyVector3(t1, c.fdir1);
-      dCalcVectorCross3(t2, normal, t1);
-    } else {
-      dPlaneSpace(normal, t1, t2);
-    }
-    int r = 1;
-    // A friction row along `t`: bounds ±coefficient, the surface's motion and slip if asked.
-    const auto friction_row = [&](const dReal* t, dReal coefficient, int motion_flag, dReal motion, int slip_flag,
-                                  dReal slip, int approx_flag) {
-      dCopyVector3(row[r].j, t);
-      dCalcVectorCross3(row[r].j + 3, c1, t);
-      if (mode & motion_flag) row[r].rhs = motion;
-      if (mode & slip_flag) row[r].cfm = slip;
-      row[r].lo = -coefficient;
-      row[r].hi = coefficient;
-      if (mode & approx_flag) row[r].findex = 0;
-      ++r;
-    };
-    const dReal mu = s.mu;
-    if (mu > 0) friction_row(t1, mu, dContactMotion1, s.motion1, dContactSlip1, s.slip1, dContactApprox1_1);
-    const dReal mu2 = (mode & dContactMu2) ? s.mu2 : mu;
-    if (mu2 > 0) friction_row(t2, mu2, dContactMotion2, s.motion2, dContactSlip2, s.slip2, dContactApprox1_2);
-    if (mode & dContactRolling) {
-      const dReal* axes[3] = {t1, t2, normal};
-      const int approx[3] = {dContactApprox1_1, dContactApprox1_2, dContactApprox1_N};
-      const bool axis_dep = (mode & dContactAxisDep) != 0;
-      const dReal rho[3] = {s.rho, axis_dep ? s.rho2 : s.rho, axis_dep ? s.rhoN : s.rho};
-      for (int i = 0; i < 3; ++i) {
-        if (rho[i] > 0) {
-          dCopyVector3(row[r].j + 3, axes[i]);
-          row[r].lo = -rho[i];
-          row[r].hi = rho[i];
-          if (mode & approx[i]) row[r].findex = 0;
-          ++r;
-        }
-      }
-    }
-  }
-
-  for (int i = 0; i < m; ++i) {
-    if (row[i].findex != -1) row[i].findex += static_cast<int>(first);
-    row[i].rhs *= fps;
-    row[i].cfm *= fps;
-  }
+  WriteContactRows(sc.contact, s, sc.reversed, m, &rows_[first], ContactBody{position, linear, angular}, nullptr,
+                   settings, fps, static_cast<int>(first));
 }
 
 void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const dReal* gravity,
@@ -278,7 +170,7 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContactLog& log, const
   Step(body, *log.Kept(body), log, gravity, settings, iterations, dt);
 }
 
-void ContactIslandStepper::Step(dBodyID body, const StaticContact& newest, const StaticContactLog& log,
+void ContactIslandStepper::Step(dBodyID body, const LoggedContact& newest, const StaticContactLog& log,
                                 const dReal* gravity, const ContactSolverSettings& settings, int iterations, dReal dt) {
   // Stage 0: gravity, the world-frame inverse inertia, the gyroscopic torque.
   FreeBodyStart b;
@@ -297,7 +189,7 @@ void ContactIslandStepper::Step(dBodyID body, const StaticContact& newest, const
   row_count_ = 0;
   const dReal* position = dBodyGetPosition(body);
   // Newest first: the order of the body's joint list, had they been ODE joints.
-  for (const StaticContact* c = &newest; c; c = c->previous >= 0 ? &log.At(c->previous) : nullptr) {
+  for (const LoggedContact* c = &newest; c; c = c->previous >= 0 ? &log.At(c->previous) : nullptr) {
     AddContactRows(*c, position, linear, angular, settings, fps);
   }
   dReal rhs_tmp[6];

@@ -12,19 +12,22 @@
 
 namespace ubersim::kernel {
 
-/// A contact of one body with the static world, as the kernel makes it for ODE.
-/// ContactIslandStepper writes the contact's constraint rows from it.
-struct StaticContact {
-  /// A contact not yet placed: its body, side and predecessor are set next.
-  explicit StaticContact(const dContact& c) : contact(c) {}
-  dContact contact;       ///< as given to dJointCreateContact
-  dBodyID body = nullptr; ///< the body touching the static world
-  bool reversed = false;  ///< the body is the contact's second: ODE turns the normal round
-  int previous = -1;      ///< the body's contact made before this one (-1: none)
+/// A contact the log made or keeps: one body's with the static world, or two bodies' with each
+/// other. ContactIslandStepper and LinkedIslandStepper write the contact's constraint rows from it.
+struct LoggedContact {
+  /// A contact not yet placed: its bodies, side and predecessor are set next.
+  explicit LoggedContact(const dContact& c) : contact(c) {}
+  dContact contact;        ///< as given to dJointCreateContact
+  dBodyID body = nullptr;  ///< the joint's first body (ODE's: the one touching the static world)
+  dBodyID other = nullptr; ///< its second body; null: the static world
+  bool reversed = false;   ///< the body is the contact's second: ODE turns the normal round
+  int previous = -1;       ///< a static contact: the body's made before this one (-1: none)
 };
 
 /// Makes a step's contact joints, and keeps a body's contacts with the static world out of ODE
 /// while that body touches nothing else (the kernel steps such a body: ContactIslandStepper).
+/// While it keeps them, every joint it makes carries its contact (Made), so that an island of
+/// bodies linked only by the log's contacts can be stepped by the kernel (LinkedIslandStepper).
 /// Every joint is made in the order its contact came, so a body QuickStep does step finds its
 /// joints as it would have: a body's kept contacts become joints (Join) before any other joint
 /// is made for it this step.
@@ -47,9 +50,11 @@ class StaticContactLog {
   void Join(dBodyID body);
   /// The newest of `body`'s kept contacts (earlier ones through `previous`), or null: none, or
   /// made joints.
-  const StaticContact* Kept(dBodyID body) const;
+  const LoggedContact* Kept(dBodyID body) const;
   /// The contact `previous` names.
-  const StaticContact& At(int index) const { return contacts_[static_cast<std::size_t>(index)]; }
+  const LoggedContact& At(int index) const { return contacts_[static_cast<std::size_t>(index)]; }
+  /// The contact ODE joint `joint` was made from, or null: not a joint the log made while keeping.
+  const LoggedContact* Made(dJointID joint) const;
   /// Forgets every contact: call with emptying the contact joint group.
   void Clear() {
     contacts_.clear();
@@ -64,12 +69,13 @@ class StaticContactLog {
     bool joined;  // its contacts are ODE joints
   };
   BodyContacts& Of(dBodyID body);
-  void MakeJoint(const StaticContact& c);
+  // Makes contacts_[index] an ODE joint that knows it (Made).
+  void MakeJoint(std::size_t index);
 
   dWorldID world_ = nullptr;
   dJointGroupID group_ = nullptr;
   bool keep_ = false;
-  std::vector<StaticContact> contacts_;
+  std::vector<LoggedContact> contacts_;
   std::vector<BodyContacts> bodies_;  // the bodies with contacts this step
   std::size_t last_ = 0;              // the last one asked for: a body's contacts come together
 };
@@ -89,7 +95,7 @@ struct ContactSolverSettings {
 /// can step freely (StepsAsQuickStepsAFreeBody) with contacts `log` kept and no ODE joint.
 bool IsStaticContactIsland(dBodyID body, const StaticContactLog& log);
 /// The same with `kept`, the log's Kept(body), looked up already.
-bool IsStaticContactIsland(dBodyID body, const StaticContact* kept);
+bool IsStaticContactIsland(dBodyID body, const LoggedContact* kept);
 
 /// Steps static-contact islands (IsStaticContactIsland) the way ODE 0.16's QuickStep steps a
 /// one-body island, floating-point operation for floating-point operation: the contact joints'
@@ -108,7 +114,7 @@ class ContactIslandStepper {
   void Step(dBodyID body, const StaticContactLog& log, const dReal* gravity, const ContactSolverSettings& settings,
             int iterations, dReal dt);
   /// The same with `newest`, the log's Kept(body), looked up already.
-  void Step(dBodyID body, const StaticContact& newest, const StaticContactLog& log, const dReal* gravity,
+  void Step(dBodyID body, const LoggedContact& newest, const StaticContactLog& log, const dReal* gravity,
             const ContactSolverSettings& settings, int iterations, dReal dt);
 
  private:
@@ -126,7 +132,7 @@ class ContactIslandStepper {
   };
   // getInfo1 and getInfo2 of `c` for the body at `position` moving at `linear`/`angular`: its
   // rows appended after the row_count_ of rows_, indices global.
-  void AddContactRows(const StaticContact& c, const dReal* position, const dReal* linear, const dReal* angular,
+  void AddContactRows(const LoggedContact& c, const dReal* position, const dReal* linear, const dReal* angular,
                       const ContactSolverSettings& settings, dReal fps);
 
   InverseInertiaCache inverse_inertia_;

@@ -160,12 +160,13 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   paused_.clear();
   own_.clear();
   held_.clear();
+  linked_stepper_.Clear();
   std::size_t solved = 0;    // enabled bodies of this pass linked by a joint: QuickStep's work
   std::size_t on_field = 0;  // of those, static-contact islands (own_ takes them)
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     dBodyID b = bodies[i];
     if (!dBodyIsEnabled(b)) continue;
-    const StaticContact* kept = static_contacts_ ? static_contacts_->Kept(b) : nullptr;
+    const LoggedContact* kept = static_contacts_ ? static_contacts_->Kept(b) : nullptr;
     if (!InPass(i, pass)) {
       paused_.push_back(b);
     } else if (kept && IsStaticContactIsland(b, kept)) {
@@ -173,6 +174,12 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
       ++on_field;
     } else if (!kept && IsLoneBody(b)) {
       own_.push_back({b, nullptr});
+    } else if (!kept && static_contacts_ && InLinkedIsland(b)) {
+      // Reached by the search of a linked island before it: stepped with that island.
+    } else if (const int linked = !kept && static_contacts_ ? linked_stepper_.Gather(b, *static_contacts_) : -1;
+               linked >= 0) {
+      own_.push_back({b, nullptr, linked});
+      ++on_field;
     } else {
       if (kept) static_contacts_->Join(b);  // QuickStep's: its contacts become ODE joints
       ++solved;
@@ -202,12 +209,13 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   }
   if (on_field > 0) settings_ = ContactSolverSettings::Of(world);
   for (const OwnIsland& o : own_) {
-    if (o.contacts) {
-      contact_stepper_.Step(o.body, *o.contacts, *static_contacts_, gravity_, settings_, iterations, dt);
+    StepOwn(o, iterations, dt);
+    // Stepped: QuickStep must not step it again.
+    if (o.linked >= 0) {
+      paused_.insert(paused_.end(), linked_stepper_.BodiesBegin(o.linked), linked_stepper_.BodiesEnd(o.linked));
     } else {
-      lone_stepper_.Step(o.body, gravity_, dt);
+      paused_.push_back(o.body);
     }
-    paused_.push_back(o.body);  // stepped: QuickStep must not step it again
   }
   if (solved == 0) return;
   for (dBodyID b : paused_) dBodyDisable(b);
@@ -224,6 +232,27 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   }
 }
 
+void IslandStepper::StepOwn(const OwnIsland& o, int iterations, double dt) {
+  if (o.contacts) {
+    contact_stepper_.Step(o.body, *o.contacts, *static_contacts_, gravity_, settings_, iterations, dt);
+  } else if (o.linked >= 0) {
+    linked_stepper_.Step(o.linked, gravity_, settings_, iterations, dt);
+    ++linked_islands_stepped_;
+  } else {
+    lone_stepper_.Step(o.body, gravity_, dt);
+  }
+}
+
+bool IslandStepper::InLinkedIsland(dBodyID b) const {
+  for (const OwnIsland& o : own_) {
+    if (o.linked >= 0 && std::find(linked_stepper_.BodiesBegin(o.linked), linked_stepper_.BodiesEnd(o.linked), b) !=
+                             linked_stepper_.BodiesEnd(o.linked)) {
+      return true;
+    }
+  }
+  return false;
+}
+
 void IslandStepper::InterleavedPass(dWorldID world, const std::vector<dBodyID>& bodies, int pass, int iterations,
                                     double dt) {
   // Every body the kernel steps is touched first in QuickStep's order, as in Pass.
@@ -237,7 +266,7 @@ void IslandStepper::InterleavedPass(dWorldID world, const std::vector<dBodyID>& 
   };
   // Lone bodies draw nothing from the generator: stepped first.
   for (const OwnIsland& o : own_) {
-    if (!o.contacts) lone_stepper_.Step(o.body, gravity_, dt);
+    if (!o.contacts && o.linked < 0) lone_stepper_.Step(o.body, gravity_, dt);
   }
   // QuickStep's islands in its order (its search, as TouchInQuickStepOrder's), gathered into
   // one QuickStep call until a static-contact island comes, which the kernel steps between.
@@ -273,9 +302,12 @@ void IslandStepper::InterleavedPass(dWorldID world, const std::vector<dBodyID>& 
     if (std::find(reached_.begin(), reached_.end(), b) != reached_.end()) continue;
     reached_.push_back(b);
     if (const OwnIsland* o = own_island(b)) {
-      if (o->contacts) {
+      if (o->contacts || o->linked >= 0) {
         flush();
-        contact_stepper_.Step(b, *o->contacts, *static_contacts_, gravity_, settings_, iterations, dt);
+        StepOwn(*o, iterations, dt);
+      }
+      if (o->linked >= 0) {  // its other bodies come later in the list: passed
+        reached_.insert(reached_.end(), linked_stepper_.BodiesBegin(o->linked), linked_stepper_.BodiesEnd(o->linked));
       }
       continue;
     }

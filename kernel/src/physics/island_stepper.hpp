@@ -9,6 +9,7 @@
 #include <ode/ode.h>
 
 #include "physics/contact_island.hpp"
+#include "physics/linked_island.hpp"
 #include "physics/lone_body.hpp"
 
 namespace ubersim::kernel {
@@ -34,10 +35,11 @@ struct IterationDemand {
 /// one QuickStep.
 ///
 /// A body no joint touches (IsLoneBody: a one-body robot driving free, a ball in flight) is
-/// stepped by LoneBodyStepper, and a body touching only the static world
-/// (IsStaticContactIsland: a wheel robot on its wheels' contacts, the ball on the carpet) by
-/// ContactIslandStepper, each bit for bit as QuickStep would; they sit QuickStep out, and a pass
-/// left with nothing else calls no QuickStep at all.
+/// stepped by LoneBodyStepper, a body touching only the static world (IsStaticContactIsland: a
+/// wheel robot on its wheels' contacts, the ball on the carpet) by ContactIslandStepper, and an
+/// island of free bodies linked only by contacts (the ball against a one-body robot, one-body
+/// robots pushing) by LinkedIslandStepper, each bit for bit as QuickStep would; they sit
+/// QuickStep out, and a pass left with nothing else calls no QuickStep at all.
 class IslandStepper {
  public:
   /// QuickStep iterations for islands holding a ball, and for every other island (Step sets the
@@ -51,6 +53,10 @@ class IslandStepper {
   /// the bodies touching only those are stepped by ContactIslandStepper; the contacts of every
   /// other body it steps are made ODE joints first.
   void SetStaticContacts(StaticContactLog* log) { static_contacts_ = log; }
+
+  /// How many islands of bodies linked by contacts the kernel has stepped (LinkedIslandStepper),
+  /// over every step: what QuickStep was spared.
+  std::size_t LinkedIslandsStepped() const { return linked_islands_stepped_; }
 
   /// One physics step of `world` (whose every body is in `bodies`) by `dt` seconds; `balls` are
   /// the balls' bodies. Bodies disabled before the step stay disabled. Lone bodies are stepped
@@ -103,12 +109,19 @@ class IslandStepper {
   dVector3 gravity_ = {};              // the world's, read once a step
   LoneBodyStepper lone_stepper_;
   ContactIslandStepper contact_stepper_;
+  LinkedIslandStepper linked_stepper_;     // its islands are this pass's
+  std::size_t linked_islands_stepped_ = 0;
   StaticContactLog* static_contacts_ = nullptr;
   ContactSolverSettings settings_;     // the world's, read in a pass with static-contact islands
   struct OwnIsland {
-    dBodyID body;
-    const StaticContact* contacts;  // a static-contact island's newest contact; null: a lone body
+    dBodyID body;                   // the island's first in Step's list (its only, but linked)
+    const LoggedContact* contacts;  // a static-contact island's newest contact
+    int linked = -1;                // else a linked island's (linked_stepper_'s); else a lone body
   };
+  // Steps own island `o` (any kind), this pass's `iterations` SOR sweeps.
+  void StepOwn(const OwnIsland& o, int iterations, double dt);
+  // Whether `b` belongs to a linked island this pass gathered already.
+  bool InLinkedIsland(dBodyID b) const;
   std::vector<dBodyID> ball_islands_;  // scratch, reused each step
   std::vector<int> group_;             // per body of Step's list: its pass
   std::vector<int> pass_iterations_;   // per pass: its QuickStep iterations
