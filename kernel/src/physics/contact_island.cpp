@@ -217,44 +217,13 @@ void ContactIslandStepper::Step(dBodyID body, const LoggedContact& newest, const
   }
   // Stage 4: unbounded rows first, then the SOR sweeps. QuickStep shuffles the order before
   // every eighth sweep after the first eight, with ODE's generator.
-  order_.clear();
-  for (int i = 0; i < m; ++i) {
-    if (rows_[static_cast<std::size_t>(i)].findex == -1) order_.push_back(i);
-  }
-  for (int i = 0; i < m; ++i) {
-    if (rows_[static_cast<std::size_t>(i)].findex != -1) order_.push_back(i);
-  }
+  UnboundedFirst(rows_, m, order_);
   ConstraintVelocity fc;
   for (int iteration = 0; iteration < iterations; ++iteration) {
-    if (iteration >= kFirstShuffle && iteration % kFirstShuffle == 0) {
-      for (int index = 1; index < m; ++index) {
-        const int swap = dRandInt(index + 1);
-        std::swap(order_[static_cast<std::size_t>(index)], order_[static_cast<std::size_t>(swap)]);
-      }
-    }
+    ShuffleIfDue(iteration, order_);
     for (const int index : order_) {
       Row& r = rows_[static_cast<std::size_t>(index)];
-      const dReal old_lambda = r.lambda;
-      dReal delta = r.rhs - old_lambda * r.cfm;
-      delta -= fc.Dot(r.j);
-      dReal hi, lo;
-      if (r.findex != -1) {
-        hi = dFabs(r.hi * rows_[static_cast<std::size_t>(r.findex)].lambda);
-        lo = -hi;
-      } else {
-        hi = r.hi;
-        lo = r.lo;
-      }
-      const dReal new_lambda = old_lambda + delta;
-      if (new_lambda < lo) {
-        delta = lo - old_lambda;
-        r.lambda = lo;
-      } else if (new_lambda > hi) {
-        delta = hi - old_lambda;
-        r.lambda = hi;
-      } else {
-        r.lambda = new_lambda;
-      }
+      const dReal delta = ClampedUpdate(r, rows_.data(), r.rhs - r.lambda * r.cfm - fc.Dot(r.j));
       if (delta != 0) fc.Add(delta, r.imj);
     }
   }

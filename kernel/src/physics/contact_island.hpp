@@ -80,6 +80,17 @@ class StaticContactLog {
   std::size_t last_ = 0;              // the last one asked for: a body's contacts come together
 };
 
+/// What a constraint row of the kernel's steppers holds beside its Jacobians: QuickStep's
+/// right-hand side, constraint force mixing, bounds, friction index and multiplier.
+struct RowTerms {
+  dReal rhs;     ///< right-hand side (scaled by the relaxed diagonal before the sweeps)
+  dReal cfm;     ///< constraint force mixing (likewise)
+  dReal lo;      ///< lower bound of the multiplier
+  dReal hi;      ///< upper bound (a friction row: its coefficient)
+  dReal lambda;  ///< the multiplier the sweeps solve for
+  int findex;    ///< a friction row's normal row, global index; -1: none
+};
+
 /// The world's settings a contact's rows and QuickStep's solver read, taken once a step.
 struct ContactSolverSettings {
   dReal erp = 0.2;                       ///< dWorldGetERP
@@ -119,16 +130,10 @@ class ContactIslandStepper {
 
  private:
   // One constraint row, as QuickStep lays it out: the Jacobian (linear, angular) and its
-  // inverse-mass image, right-hand side, mixing, bounds, friction index, and its multiplier.
-  struct Row {
+  // inverse-mass image beside the row's terms.
+  struct Row : RowTerms {
     dReal j[6];
     dReal imj[6];
-    dReal rhs;
-    dReal cfm;
-    dReal lo;
-    dReal hi;
-    dReal lambda;
-    int findex;
   };
   // getInfo1 and getInfo2 of `c` for the body at `position` moving at `linear`/`angular`: its
   // rows appended after the row_count_ of rows_, indices global.

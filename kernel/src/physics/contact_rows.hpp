@@ -3,6 +3,9 @@
 // getInfo2, then QuickStep's scaling by the step's rate), shared by the kernel's steppers.
 #pragma once
 
+#include <utility>
+#include <vector>
+
 #include <ode/ode.h>
 
 #include "physics/contact_island.hpp"
@@ -183,6 +186,56 @@ void WriteContactRows(const dContact& c, const dSurfaceParameters& s, bool rever
     row[i].rhs *= fps;
     row[i].cfm *= fps;
   }
+}
+
+/// QuickStep's row order before its sweeps: the `m` rows without a friction index first, then
+/// the others, each in index order.
+template <typename Row>
+void UnboundedFirst(const std::vector<Row>& rows, int m, std::vector<int>& order) {
+  order.clear();
+  for (int i = 0; i < m; ++i) {
+    if (rows[static_cast<std::size_t>(i)].findex == -1) order.push_back(i);
+  }
+  for (int i = 0; i < m; ++i) {
+    if (rows[static_cast<std::size_t>(i)].findex != -1) order.push_back(i);
+  }
+}
+
+/// QuickStep's shuffle of the row order before sweep `iteration` (0-based): before the ninth and
+/// every eighth after, with ODE's generator; a step of fewer sweeps draws nothing.
+inline void ShuffleIfDue(int iteration, std::vector<int>& order) {
+  constexpr int kEvery = ContactIslandStepper::kFirstShuffle;
+  if (iteration < kEvery || iteration % kEvery != 0) return;
+  for (int index = 1; index < static_cast<int>(order.size()); ++index) {
+    const int swap = dRandInt(index + 1);
+    std::swap(order[static_cast<std::size_t>(index)], order[static_cast<std::size_t>(swap)]);
+  }
+}
+
+/// A sweep's update of row `r`'s multiplier by `delta`, clamped to its bounds (a friction row's
+/// by its normal row's multiplier, found in `rows`); returns the change made.
+template <typename Row>
+dReal ClampedUpdate(Row& r, const Row* rows, dReal delta) {
+  const dReal old_lambda = r.lambda;
+  dReal hi, lo;
+  if (r.findex != -1) {
+    hi = dFabs(r.hi * rows[r.findex].lambda);
+    lo = -hi;
+  } else {
+    hi = r.hi;
+    lo = r.lo;
+  }
+  const dReal new_lambda = old_lambda + delta;
+  if (new_lambda < lo) {
+    r.lambda = lo;
+    return lo - old_lambda;
+  }
+  if (new_lambda > hi) {
+    r.lambda = hi;
+    return hi - old_lambda;
+  }
+  r.lambda = new_lambda;
+  return delta;
 }
 
 }  // namespace ubersim::kernel

@@ -187,47 +187,18 @@ void LinkedIslandStepper::Step(int island, const dReal* gravity, const ContactSo
   }
 
   // Stage 4: unbounded rows first, then the SOR sweeps, shuffled as ContactIslandStepper's.
-  order_.clear();
-  for (int i = 0; i < m; ++i) {
-    if (rows_[static_cast<std::size_t>(i)].findex == -1) order_.push_back(i);
-  }
-  for (int i = 0; i < m; ++i) {
-    if (rows_[static_cast<std::size_t>(i)].findex != -1) order_.push_back(i);
-  }
+  UnboundedFirst(rows_, m, order_);
   fc_.assign(6 * n, 0);
   for (int iteration = 0; iteration < iterations; ++iteration) {
-    if (iteration >= ContactIslandStepper::kFirstShuffle && iteration % ContactIslandStepper::kFirstShuffle == 0) {
-      for (int index = 1; index < m; ++index) {
-        const int swap = dRandInt(index + 1);
-        std::swap(order_[static_cast<std::size_t>(index)], order_[static_cast<std::size_t>(swap)]);
-      }
-    }
+    ShuffleIfDue(iteration, order_);
     for (const int index : order_) {
       Row& r = rows_[static_cast<std::size_t>(index)];
-      const dReal old_lambda = r.lambda;
-      dReal delta = r.rhs - old_lambda * r.cfm;
+      dReal delta = r.rhs - r.lambda * r.cfm;
       dReal* f1 = &fc_[6 * static_cast<std::size_t>(r.b1)];
       delta -= Dot6(f1, r.j);
       dReal* f2 = r.b2 >= 0 ? &fc_[6 * static_cast<std::size_t>(r.b2)] : nullptr;
       if (f2) delta -= Dot6(f2, r.j2);
-      dReal hi, lo;
-      if (r.findex != -1) {
-        hi = dFabs(r.hi * rows_[static_cast<std::size_t>(r.findex)].lambda);
-        lo = -hi;
-      } else {
-        hi = r.hi;
-        lo = r.lo;
-      }
-      const dReal new_lambda = old_lambda + delta;
-      if (new_lambda < lo) {
-        delta = lo - old_lambda;
-        r.lambda = lo;
-      } else if (new_lambda > hi) {
-        delta = hi - old_lambda;
-        r.lambda = hi;
-      } else {
-        r.lambda = new_lambda;
-      }
+      delta = ClampedUpdate(r, rows_.data(), delta);
       if (delta != 0) {
         AddScaled6(f1, delta, r.imj);
         if (f2) AddScaled6(f2, delta, r.imj2);

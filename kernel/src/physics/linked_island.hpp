@@ -47,19 +47,12 @@ class LinkedIslandStepper {
  private:
   static std::size_t Index(int island) { return static_cast<std::size_t>(island); }
   // A constraint row as QuickStep lays it out: both bodies' Jacobians and their inverse-mass
-  // images, right-hand side, mixing, bounds, friction index, the bodies (b2 -1: the static
-  // world), and its multiplier.
-  struct Row {
+  // images beside the row's terms, and the bodies (b2 -1: the static world).
+  struct Row : RowTerms {
     dReal j[6];
     dReal j2[6];
     dReal imj[6];
     dReal imj2[6];
-    dReal rhs;
-    dReal cfm;
-    dReal lo;
-    dReal hi;
-    dReal lambda;
-    int findex;
     int b1;
     int b2;
   };
