@@ -174,10 +174,7 @@ void ContactIslandStepper::Step(dBodyID body, const LoggedContact& newest, const
                                 const dReal* gravity, const ContactSolverSettings& settings, int iterations, dReal dt) {
   // Stage 0: gravity, the world-frame inverse inertia, the gyroscopic torque.
   FreeBodyStart b;
-  StartFreeBodyStep(body, gravity, inverse_inertia_, b);
-  if (dBodyGetGyroscopicMode(body) && b.inverse_mass > 0) {
-    AddImplicitGyroscopicTorque(*b.mass, b.rotation, b.angular, dt, b.torque);
-  }
+  StartConstrainedBodyStep(body, gravity, inverse_inertia_, dt, b);
   const dReal inverse_mass = b.inverse_mass;
   const dReal* inverse_inertia = b.inverse_inertia;
   dReal* linear = b.linear;
@@ -193,9 +190,7 @@ void ContactIslandStepper::Step(dBodyID body, const LoggedContact& newest, const
     AddContactRows(*c, position, linear, angular, settings, fps);
   }
   dReal rhs_tmp[6];
-  for (int k = 0; k < 3; ++k) rhs_tmp[k] = -(b.force[k] * inverse_mass + linear[k] * fps);
-  dMultiply0_331(rhs_tmp + 3, inverse_inertia, b.torque);
-  for (int k = 0; k < 3; ++k) rhs_tmp[3 + k] = -(angular[k] * fps) - rhs_tmp[3 + k];
+  UnconstrainedVelocityTerm(b, fps, rhs_tmp);
 
   // Then, row by row (QuickStep does each stage for all rows, but no row depends on another):
   // J·rhs_tmp into the right-hand side, M⁻¹·Jᵀ, and the row scaled by its relaxed diagonal.
@@ -231,11 +226,7 @@ void ContactIslandStepper::Step(dBodyID body, const LoggedContact& newest, const
   fc.Store(velocity_change);
 
   // Stage 4b: the constraint forces' velocity change; then the body's step as a free body's.
-  for (int k = 0; k < 3; ++k) {
-    linear[k] += dt * velocity_change[k];
-    angular[k] += dt * velocity_change[3 + k];
-  }
-  FinishBodyStep(body, b.arrays, inverse_mass, inverse_inertia, b.force, b.torque, linear, angular, dt);
+  FinishConstrainedBodyStep(body, b, velocity_change, dt);
 }
 
 }  // namespace ubersim::kernel

@@ -48,4 +48,31 @@ inline void StartFreeBodyStep(dBodyID body, const dReal* gravity, InverseInertia
   s.inverse_mass = m.inverse_mass;
 }
 
+/// QuickStep's whole stage 0 for a body its solver will constrain: StartFreeBodyStep and, if the
+/// body asks for it, the implicit gyroscopic torque over `dt`.
+inline void StartConstrainedBodyStep(dBodyID body, const dReal* gravity, InverseInertiaCache& cache, dReal dt,
+                                     FreeBodyStart& s) {
+  StartFreeBodyStep(body, gravity, cache, s);
+  if (dBodyGetGyroscopicMode(body) && s.inverse_mass > 0) {
+    AddImplicitGyroscopicTorque(*s.mass, s.rotation, s.angular, dt, s.torque);
+  }
+}
+
+/// QuickStep's rhs_tmp of body `s`: -(v/h + M⁻¹·f), linear then angular, `fps` = 1/h.
+inline void UnconstrainedVelocityTerm(const FreeBodyStart& s, dReal fps, dReal* out) {
+  for (int k = 0; k < 3; ++k) out[k] = -(s.force[k] * s.inverse_mass + s.linear[k] * fps);
+  dMultiply0_331(out + 3, s.inverse_inertia, s.torque);
+  for (int k = 0; k < 3; ++k) out[3 + k] = -(s.angular[k] * fps) - out[3 + k];
+}
+
+/// QuickStep's stage 4b and the rest of the step for body `s`: the constraint forces' velocity
+/// change (`velocity_change`, M⁻¹·Jᵀ·λ, linear then angular) over `dt`, then FinishBodyStep.
+inline void FinishConstrainedBodyStep(dBodyID body, FreeBodyStart& s, const dReal* velocity_change, dReal dt) {
+  for (int k = 0; k < 3; ++k) {
+    s.linear[k] += dt * velocity_change[k];
+    s.angular[k] += dt * velocity_change[3 + k];
+  }
+  FinishBodyStep(body, s.arrays, s.inverse_mass, s.inverse_inertia, s.force, s.torque, s.linear, s.angular, dt);
+}
+
 }  // namespace ubersim::kernel

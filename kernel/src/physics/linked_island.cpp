@@ -106,11 +106,7 @@ void LinkedIslandStepper::Step(int island, const dReal* gravity, const ContactSo
   // Stage 0: gravity, the world-frame inverse inertia, the gyroscopic torque; body by body.
   if (starts_.size() < n) starts_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    FreeBodyStart& b = starts_[i];
-    StartFreeBodyStep(bodies[i], gravity, inverse_inertia_, b);
-    if (dBodyGetGyroscopicMode(bodies[i]) && b.inverse_mass > 0) {
-      AddImplicitGyroscopicTorque(*b.mass, b.rotation, b.angular, dt, b.torque);
-    }
+    StartConstrainedBodyStep(bodies[i], gravity, inverse_inertia_, dt, starts_[i]);
   }
 
   // Stage 2: the rows, joint by joint in the island's order.
@@ -143,13 +139,7 @@ void LinkedIslandStepper::Step(int island, const dReal* gravity, const ContactSo
 
   // The right-hand side c/h - J·(v/h + M⁻¹·f): -(v/h + M⁻¹·f) per body first.
   rhs_tmp_.resize(6 * n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const FreeBodyStart& b = starts_[i];
-    dReal* t = &rhs_tmp_[6 * i];
-    for (int k = 0; k < 3; ++k) t[k] = -(b.force[k] * b.inverse_mass + b.linear[k] * fps);
-    dMultiply0_331(t + 3, b.inverse_inertia, b.torque);
-    for (int k = 0; k < 3; ++k) t[3 + k] = -(b.angular[k] * fps) - t[3 + k];
-  }
+  for (std::size_t i = 0; i < n; ++i) UnconstrainedVelocityTerm(starts_[i], fps, &rhs_tmp_[6 * i]);
   // Then, row by row (QuickStep does each stage for all rows, but no row depends on another):
   // J·rhs_tmp into the right-hand side, M⁻¹·Jᵀ, and the row scaled by its relaxed diagonal.
   const int m = static_cast<int>(row_count_);
@@ -208,16 +198,7 @@ void LinkedIslandStepper::Step(int island, const dReal* gravity, const ContactSo
 
   // Stage 4b: the constraint forces' velocity change; then each body's step as a free body's,
   // in the island's order (the order its geometries are told they moved).
-  for (std::size_t i = 0; i < n; ++i) {
-    FreeBodyStart& b = starts_[i];
-    const dReal* f = &fc_[6 * i];
-    for (int k = 0; k < 3; ++k) {
-      b.linear[k] += dt * f[k];
-      b.angular[k] += dt * f[3 + k];
-    }
-    FinishBodyStep(bodies[i], b.arrays, b.inverse_mass, b.inverse_inertia, b.force, b.torque, b.linear, b.angular,
-                   dt);
-  }
+  for (std::size_t i = 0; i < n; ++i) FinishConstrainedBodyStep(bodies[i], starts_[i], &fc_[6 * i], dt);
 }
 
 }  // namespace ubersim::kernel
