@@ -44,13 +44,30 @@ using ubersim::Vec3;
 // stack at this capacity, no allocation per step.
 constexpr int kMaxWheels = 8;
 using WheelSpeeds = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxWheels, 1>;          // one per wheel
-using VelocityToWheels = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, kMaxWheels, 3>;     // wheels × 3
 using WheelsToVelocity = Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxWheels>;     // 3 × wheels
 
 struct Wheel {
   Vec3 centre;        // wheel centre in the chassis frame (origin at the centre of mass), m
   Vec3 tangent;       // rolling direction in the robot frame (counter-clockwise)
+  // In the carpet plane, robot frame: the axle (up × tangent) and each direction's lever arm
+  // about the vertical through the centre of mass (centre × direction), m.
+  double axle_x = 0, axle_y = 0;
+  double roll_lever = 0, axle_lever = 0;
 };
+
+// sin and cos of a turn of at most 0.1 rad (a step's turn: 12 rad/s for 5 ms is 0.06) by their
+// series to the last bit (the first term left out is below 3e-19 of the result); std::sin and
+// std::cos beyond. A libm call was a tenth of a robot's drive work per step.
+void SinCosOfSmallTurn(double a, double& s, double& c) {
+  if (!(std::abs(a) <= 0.1)) {
+    s = std::sin(a);
+    c = std::cos(a);
+    return;
+  }
+  const double a2 = a * a;
+  s = a * (1.0 - a2 * (1.0 / 6) * (1.0 - a2 * (1.0 / 20) * (1.0 - a2 * (1.0 / 42) * (1.0 - a2 * (1.0 / 72)))));
+  c = 1.0 - a2 * 0.5 * (1.0 - a2 * (1.0 / 12) * (1.0 - a2 * (1.0 / 30) * (1.0 - a2 * (1.0 / 56) * (1.0 - a2 * (1.0 / 90)))));
+}
 
 // The robot stands on its wheels while its centre of mass is at most this far above where it
 // rests, m; higher, its wheels are off the carpet (they push nothing and carry nothing).
@@ -122,16 +139,19 @@ class OmniForceDrive final : public ubersim::Drive {
       const Vec3 radial(std::cos(angle), std::sin(angle), 0.0);
       w.tangent = Vec3(-std::sin(angle), std::cos(angle), 0.0);
       w.centre = radial * distance_ + Vec3(0, 0, wheel_radius_ - chassis_z);
+      w.axle_x = -w.tangent.y();
+      w.axle_y = w.tangent.x();
+      w.roll_lever = w.centre.x() * w.tangent.y() - w.centre.y() * w.tangent.x();
+      w.axle_lever = w.centre.x() * w.axle_y - w.centre.y() * w.axle_x;
     }
-    // Wheel speeds from the robot's velocity, and a least-squares inverse for odometry (as omni).
+    // The robot's velocity from its wheel speeds (odometry, as omni): the least-squares inverse of
+    // the wheel speeds a velocity asks for.
     Eigen::MatrixXd m(wheels_.size(), 3);
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
       m.row(static_cast<Eigen::Index>(i)) << wheels_[i].tangent.x(), wheels_[i].tangent.y(), distance_;
     }
     const Eigen::MatrixXd geometry = m / wheel_radius_;
-    geometry_ = geometry;
     inverse_ = geometry.completeOrthogonalDecomposition().pseudoInverse();
-    wheel_targets_.setZero(static_cast<Eigen::Index>(wheels_.size()));
     // The wheels' yaw servo gain per step: their shares m/n at wheel_distance d over the
     // chassis' moment of inertia, a solid cylinder's m·R²/2, is 2·d²/R². At 2 or more each step
     // would overshoot by the whole error or more and the robot would spin up; wheels far out (d
@@ -229,15 +249,18 @@ class OmniForceDrive final : public ubersim::Drive {
     ubersim::Body& chassis = ctx_->Chassis();
     const ubersim::Pose pose = chassis.GetPose();
     const ubersim::Twist twist = chassis.GetTwist();
-    const Eigen::Vector2d heading = ubersim::HeadingOf(pose.orientation);
-    WheelSpeeds& targets = wheel_targets_;  // wheel speeds, rad/s
+    const Eigen::Vector2d heading = Heading(pose.orientation);
+    const std::size_t n = wheels_.size();
+    double surface[kMaxWheels];  // each wheel's surface speed, m/s
     const bool fresh = watchdog_.Fresh(ctx_->SimTime());
     const auto* direct = fresh ? std::get_if<ubersim::WheelSpeedCommand>(&command_) : nullptr;
     if (direct) {
       // Direct wheel speeds bypass the velocity loop, as on the real robots.
       const Eigen::Map<const WheelSpeeds> speeds(direct->wheel_speeds.data(),
                                                  static_cast<Eigen::Index>(direct->wheel_speeds.size()));
-      targets = speeds.cwiseMax(-max_wheel_speed_).cwiseMin(max_wheel_speed_);
+      for (std::size_t i = 0; i < n; ++i) {
+        surface[i] = std::clamp(direct->wheel_speeds[i], -max_wheel_speed_, max_wheel_speed_) * wheel_radius_;
+      }
       const Eigen::Vector3d v = inverse_ * speeds;
       servo_.Set({Eigen::Vector2d(v.x(), v.y()), v.z()});
       gyro_.Reset();
@@ -247,14 +270,26 @@ class OmniForceDrive final : public ubersim::Drive {
       const ubersim::PlanarVelocity& set = servo_.Step(target, step.dt);
       // The firmware's gyro holds the heading the setpoint integrates to.
       const double spin = gyro_.Correct(set.angular, twist.angular.z(), step.dt);
-      // In the frame the robot turns to within the step: driving while turning, it keeps its course.
-      const Eigen::Vector2d lin = ubersim::AheadOfTheTurn(set.linear, spin, step.dt);
-      targets.noalias() = geometry_ * Eigen::Vector3d(lin.x(), lin.y(), spin);
+      // In the frame the robot turns to within the step (ubersim::AheadOfTheTurn): driving while
+      // turning, it keeps its course.
+      double s, c;
+      SinCosOfSmallTurn(spin * step.dt, s, c);
+      const double lx = c * set.linear.x() - s * set.linear.y();
+      const double ly = s * set.linear.x() + c * set.linear.y();
+      double peak = 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const Wheel& w = wheels_[i];
+        surface[i] = w.tangent.x() * lx + w.tangent.y() * ly + w.roll_lever * spin;
+        peak = std::max(peak, std::abs(surface[i]));
+      }
       // Keep the direction when a wheel would exceed its speed: scale all wheels together.
-      const double peak = targets.cwiseAbs().maxCoeff();
-      if (peak > max_wheel_speed_) targets *= max_wheel_speed_ / peak;
+      const double max_surface = max_wheel_speed_ * wheel_radius_;
+      if (peak > max_surface) {
+        const double scale = max_surface / peak;
+        for (std::size_t i = 0; i < n; ++i) surface[i] *= scale;
+      }
     }
-    if (Standing(pose.position)) PushWheels(chassis, heading, twist, targets, step.dt);  // in the air: no grip, no support
+    if (Standing(pose.position)) PushWheels(chassis, heading, twist, surface, step.dt);  // in the air: no grip, no support
   }
 
  private:
@@ -279,59 +314,59 @@ class OmniForceDrive final : public ubersim::Drive {
     return f;
   }
 
+  // The heading of a chassis turned by `q` (ubersim::HeadingOf, from the quaternion's terms):
+  // the forward axis in the carpet plane, unit; (1, 0) pointing straight up or down.
+  static Eigen::Vector2d Heading(const ubersim::Quat& q) {
+    const double x = 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z());
+    const double y = 2.0 * (q.x() * q.y() + q.w() * q.z());
+    const double length = std::sqrt(x * x + y * y);
+    if (!(length > 0.0)) return Eigen::Vector2d(1.0, 0.0);
+    return Eigen::Vector2d(x / length, y / length);
+  }
+
   // Each wheel's motor and rollers push the chassis at the wheel's contact point, and the wheels
   // together carry the robot's weight. The robot stands level (PostStep), so this is planar: the
   // pushes' tilting moments are the carpet's to take, as the weight is. The force that would
-  // reach the wheel's target in this step if it moved its share of the robot is a stiff
+  // reach the wheel's surface speed in this step if it moved its share of the robot is a stiff
   // proportional servo. Summed over the wheels it never overshoots in translation; in yaw the
   // shares act at wheel_distance on a chassis with less moment of inertia than they would have
   // there, so it overshoots by yaw_gain_ - 1 of the error each step (0.54 on the modern robot)
-  // and settles in a few steps (see Configure).
+  // and settles in a few steps (see Configure). Worked in the robot frame, where the wheels'
+  // directions and lever arms are constants, and turned into the carpet's once.
   void PushWheels(ubersim::Body& chassis, const Eigen::Vector2d& heading_unit, const ubersim::Twist& twist,
-                  const WheelSpeeds& targets, double dt) {
-    // Plain scalars, in the order of the 2-D vector algebra they spell out (the heading turns
-    // robot-frame (x, y) into the carpet's: (hx·x − hy·y, hy·x + hx·y)): a quarter of a step's
-    // drive work went to building small vectors.
+                  const double* surface, double dt) {
     const double hx = heading_unit.x(), hy = heading_unit.y();
     const double mass = chassis.Mass();
     const Vec3 gravity = ctx_->Gravity();
     const double n = static_cast<double>(wheels_.size());
-    const double load = mass / n * gravity.norm();  // N: static, no load transfer
-    const double share = mass / n * servo_scale_;   // kg each wheel moves
+    const double load = mass / n * gravity.norm();       // N: static, no load transfer
+    const double gain = mass / n * servo_scale_ / dt;     // N per m/s: each wheel's share, in one step
     const double motor_force = max_torque_ / wheel_radius_;  // N at the contact
     const double drive_limit = std::min(motor_force, mu_roll_ * load);
     const double roller_limit = mu_axle_ * load;
-    const double vx = twist.linear.x(), vy = twist.linear.y();
+    // The chassis' velocity in the robot frame: forward, left, and the turn.
+    const double u = hx * twist.linear.x() + hy * twist.linear.y();
+    const double v = hx * twist.linear.y() - hy * twist.linear.x();
     const double spin = twist.angular.z();
-    double fx = 0.0, fy = 0.0, torque = 0.0;
+    double fx = 0.0, fy = 0.0, torque = 0.0;  // robot frame
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
       const Wheel& w = wheels_[i];
-      // Centre of mass to the contact and the rolling direction, in the carpet plane.
-      const double ax = hx * w.centre.x() + -hy * w.centre.y();
-      const double ay = hy * w.centre.x() + hx * w.centre.y();
-      const double rx = hx * w.tangent.x() + -hy * w.tangent.y();
-      const double ry = hy * w.tangent.x() + hx * w.tangent.y();
-      // The contact point's velocity; the axle is up × rolling = (−ry, rx).
-      const double px = vx + spin * -ay;
-      const double py = vy + spin * ax;
-      const double surface_speed = targets(static_cast<Eigen::Index>(i)) * wheel_radius_;
-      const double drive = std::clamp(share * (surface_speed - (px * rx + py * ry)) / dt, -drive_limit, drive_limit);
-      const double roller = std::clamp(-share * (px * -ry + py * rx) / dt, -roller_limit, roller_limit);
-      const double push_x = rx * drive + -ry * roller;
-      const double push_y = ry * drive + rx * roller;
-      fx += push_x;
-      fy += push_y;
-      torque += ax * push_y - ay * push_x;
+      // The contact point's velocity along the rolling direction and along the axle.
+      const double along = w.tangent.x() * u + w.tangent.y() * v + w.roll_lever * spin;
+      const double across = w.axle_x * u + w.axle_y * v + w.axle_lever * spin;
+      const double drive = std::clamp(gain * (surface[i] - along), -drive_limit, drive_limit);
+      const double roller = std::clamp(-gain * across, -roller_limit, roller_limit);
+      fx += w.tangent.x() * drive + w.axle_x * roller;
+      fy += w.tangent.y() * drive + w.axle_y * roller;
+      torque += w.roll_lever * drive + w.axle_lever * roller;
     }
-    chassis.AddForce(Vec3(fx, fy, 0.0) - mass * gravity);
+    chassis.AddForce(Vec3(hx * fx - hy * fy, hy * fx + hx * fy, 0.0) - mass * gravity);
     chassis.AddTorque(Vec3(0.0, 0.0, torque));
   }
 
   ubersim::RobotContext* ctx_ = nullptr;
   std::vector<Wheel> wheels_;  // sized once in Configure: the contact handlers hold indices
-  VelocityToWheels geometry_;  // wheel speeds (rad/s) = geometry_ · (forward, left, angular)
   WheelsToVelocity inverse_;   // (forward, left, angular) = inverse_ · wheel speeds
-  WheelSpeeds wheel_targets_;  // this step's wheel speeds, rad/s
   double wheel_radius_ = 0.029;
   double distance_ = 0.08;
   double max_torque_ = 0.5;
