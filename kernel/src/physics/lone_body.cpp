@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "physics/lone_body.hpp"
 
+#include <cmath>
 #include <cstring>
 
 #include "physics/free_body_start.hpp"
@@ -98,6 +99,73 @@ void AddImplicitGyroscopicTorque(const dMass& mass, const dReal* rotation, const
   }
 }
 
+namespace {
+
+// The quaternion's rate of change at angular velocity `w`, as ODE's dDQfromW computes it.
+inline void QuaternionRate(const dReal* w, const dReal* q, dReal* dq) {
+  dq[0] = dReal(0.5) * (-w[0] * q[1] - w[1] * q[2] - w[2] * q[3]);
+  dq[1] = dReal(0.5) * (w[0] * q[0] + w[1] * q[3] - w[2] * q[2]);
+  dq[2] = dReal(0.5) * (-w[0] * q[3] + w[1] * q[0] + w[2] * q[1]);
+  dq[3] = dReal(0.5) * (w[0] * q[2] - w[1] * q[1] + w[2] * q[0]);
+}
+
+// `q` scaled to unit length as ODE's dNormalize4 does it (the identity for a zero quaternion).
+inline void NormaliseQuaternion(dReal* q) {
+  dReal l = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  if (l > 0) {
+    l = dReal(1.0) / std::sqrt(l);
+    for (int k = 0; k < 4; ++k) q[k] *= l;
+  } else {
+    q[0] = 1;
+    q[1] = q[2] = q[3] = 0;
+  }
+}
+
+// The rotation matrix (ODE's 3×4) of the unit quaternion `q`, as ODE's dRfromQ computes it.
+inline void RotationOf(const dReal* q, dReal* r) {
+  const dReal qq1 = 2 * q[1] * q[1];
+  const dReal qq2 = 2 * q[2] * q[2];
+  const dReal qq3 = 2 * q[3] * q[3];
+  r[0] = 1 - qq2 - qq3;
+  r[1] = 2 * (q[1] * q[2] - q[0] * q[3]);
+  r[2] = 2 * (q[1] * q[3] + q[0] * q[2]);
+  r[3] = 0;
+  r[4] = 2 * (q[1] * q[2] + q[0] * q[3]);
+  r[5] = 1 - qq1 - qq3;
+  r[6] = 2 * (q[2] * q[3] - q[0] * q[1]);
+  r[7] = 0;
+  r[8] = 2 * (q[1] * q[3] - q[0] * q[2]);
+  r[9] = 2 * (q[2] * q[3] + q[0] * q[1]);
+  r[10] = 1 - qq1 - qq2;
+  r[11] = 0;
+}
+
+// The end of every step of a free body: its pose moves with its new velocities `linear` and
+// `angular` over `dt`, in the body's own arrays (the getters' pointers are ODE's storage, not
+// copies): what dBodySetPosition and dBodySetQuaternion would store, with dDQfromW, dNormalize4
+// and dRfromQ's arithmetic written out in their order; each geometry is told that the body
+// moved, as the setters tell it (the calls were half of a lone body's step); the velocities are
+// stored and the accumulators cleared.
+void MoveBody(dBodyID body, const BodyArrays& arrays, const dReal* linear, const dReal* angular, dReal dt) {
+  auto* position = const_cast<dReal*>(dBodyGetPosition(body));
+  for (int k = 0; k < 3; ++k) position[k] += dt * linear[k];
+  auto* q = const_cast<dReal*>(dBodyGetQuaternion(body));
+  dReal dq[4];
+  QuaternionRate(angular, q, dq);
+  for (int k = 0; k < 4; ++k) q[k] += dt * dq[k];
+  NormaliseQuaternion(q);
+  RotationOf(q, const_cast<dReal*>(dBodyGetRotation(body)));
+  for (dGeomID g = dBodyGetFirstGeom(body); g; g = dGeomGetBodyNext(g)) dGeomMoved(g);
+
+  for (int k = 0; k < 3; ++k) {
+    arrays.linear[k] = linear[k];
+    arrays.angular[k] = angular[k];
+    arrays.force[k] = arrays.torque[k] = 0;
+  }
+}
+
+}  // namespace
+
 void FinishBodyStep(dBodyID body, const BodyArrays& arrays, dReal inverse_mass, const dReal* inverse_inertia,
                     const dReal* force, dReal* torque, dReal* linear, dReal* angular, dReal dt) {
   // Velocities.
@@ -108,27 +176,57 @@ void FinishBodyStep(dBodyID body, const BodyArrays& arrays, dReal inverse_mass, 
   }
   dMultiplyAdd0_331(angular, inverse_inertia, torque);
 
-  // Pose: dBodySetQuaternion normalises and converts to the rotation matrix as dxStepBody does,
-  // and tells the body's geometries that it moved. The position goes straight into the body's
-  // own array (dBodyGetPosition's pointer is ODE's storage, not a copy): dBodySetPosition would
-  // tell every geometry a second time, a third of a wheel robot's integration.
-  auto* position = const_cast<dReal*>(dBodyGetPosition(body));
-  for (int k = 0; k < 3; ++k) position[k] += dt * linear[k];
-  dQuaternion q;
-  std::memcpy(q, dBodyGetQuaternion(body), sizeof q);
-  dReal dq[4];
-  dDQfromW(dq, angular, q);
-  for (int k = 0; k < 4; ++k) q[k] += dt * dq[k];
+  MoveBody(body, arrays, linear, angular, dt);
+}
 
-  for (int k = 0; k < 3; ++k) {
-    arrays.linear[k] = linear[k];
-    arrays.angular[k] = angular[k];
+bool LoneBodyStepper::StepLevel(dBodyID body, const dReal* gravity, dReal dt) {
+  // Level: no tilt in the orientation nor in the rotation matrix built from it, no tilting turn
+  // (exactly +0: the general step's sums of zeros keep a +0 as it is), no tilting torque, and a
+  // torque about the vertical that turns the body (with none, the sum of zeros below could
+  // change the sign of a zero turn rate).
+  const dReal* q = dBodyGetQuaternion(body);
+  const dReal* rotation = dBodyGetRotation(body);
+  const BodyArrays arrays = BodyArrays::Of(body);
+  const dReal* w = arrays.angular;
+  const dReal* t = arrays.torque;
+  const auto positive_zero = [](dReal x) { return x == 0 && !std::signbit(x); };
+  if (q[1] != 0 || q[2] != 0 || rotation[8] != 0 || rotation[9] != 0 || rotation[10] != 1 ||
+      !positive_zero(w[0]) || !positive_zero(w[1]) || t[0] != 0 || t[1] != 0) {
+    return false;
   }
-  dBodySetQuaternion(body, q);
-  for (int k = 0; k < 3; ++k) arrays.force[k] = arrays.torque[k] = 0;
+  const BodyMass m = inverse_inertia_.Of(body);
+  const dReal* inverse = m.inverse_inertia;
+  const dReal turn = inverse[10] * (t[2] * dt);
+  // The vertical a principal axis (the general step skips the zero gyroscopic torque only
+  // then), and a torque about it that turns the body only about it.
+  if (m.mass->I[2] != 0 || m.mass->I[6] != 0 || inverse[2] != 0 || inverse[6] != 0 || turn == 0 ||
+      !std::isfinite(turn) || !(m.inverse_mass > 0)) {
+    return false;
+  }
+  dReal force[3] = {arrays.force[0], arrays.force[1], arrays.force[2]};
+  if (dBodyGetGravityMode(body)) {
+    for (int k = 0; k < 3; ++k) {
+      if (gravity[k] != 0) force[k] += m.mass->mass * gravity[k];
+    }
+  }
+  const dReal impulse_per_force = dt * m.inverse_mass;
+  dReal linear[3], angular[3];
+  for (int k = 0; k < 3; ++k) linear[k] = arrays.linear[k] + impulse_per_force * force[k];
+  // The general step's world-frame inverse inertia times the torque: its row for the turn about
+  // the vertical is exactly inverse[10] times the torque about it (the other products are zeros
+  // that leave a non-zero sum as it is), and the tilting rows add zeros to the +0 turn rates.
+  angular[0] = w[0];
+  angular[1] = w[1];
+  angular[2] = w[2] + turn;
+  MoveBody(body, arrays, linear, angular, dt);
+  return true;
 }
 
 void LoneBodyStepper::Step(dBodyID body, const dReal* gravity, dReal dt) {
+  if (!StepLevel(body, gravity, dt)) StepAnyPose(body, gravity, dt);
+}
+
+void LoneBodyStepper::StepAnyPose(dBodyID body, const dReal* gravity, dReal dt) {
   FreeBodyStart b;
   StartFreeBodyStep(body, gravity, inverse_inertia_, b);
   // Turning only about a vertical principal axis (a one-body robot driving level: most steps of

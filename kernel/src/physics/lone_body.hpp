@@ -88,8 +88,14 @@ class LoneBodyStepper {
  public:
   /// One step of `body` by `dt` seconds under `gravity` (the world's, m/s²).
   void Step(dBodyID body, const dReal* gravity, dReal dt);
+  /// Step's work for a body in any pose; Step takes a shorter way to the same bits for a body
+  /// standing level and turning about a vertical principal axis (a one-body robot driving).
+  void StepAnyPose(dBodyID body, const dReal* gravity, dReal dt);
 
  private:
+  // The level body's step (see StepAnyPose); false, and nothing done, for any other.
+  bool StepLevel(dBodyID body, const dReal* gravity, dReal dt);
+
   InverseInertiaCache inverse_inertia_;
 };
 
