@@ -219,6 +219,7 @@ bool LoneBodyStepper::StepLevel(dBodyID body, const dReal* gravity, dReal dt) {
   angular[1] = w[1];
   angular[2] = w[2] + turn;
   MoveBody(body, arrays, linear, angular, dt);
+  ++level_steps_;
   return true;
 }
 

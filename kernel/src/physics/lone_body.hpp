@@ -91,12 +91,15 @@ class LoneBodyStepper {
   /// Step's work for a body in any pose; Step takes a shorter way to the same bits for a body
   /// standing level and turning about a vertical principal axis (a one-body robot driving).
   void StepAnyPose(dBodyID body, const dReal* gravity, dReal dt);
+  /// How many of Step's steps took the level body's way.
+  std::size_t LevelSteps() const { return level_steps_; }
 
  private:
   // The level body's step (see StepAnyPose); false, and nothing done, for any other.
   bool StepLevel(dBodyID body, const dReal* gravity, dReal dt);
 
   InverseInertiaCache inverse_inertia_;
+  std::size_t level_steps_ = 0;
 };
 
 }  // namespace ubersim::kernel

@@ -168,6 +168,51 @@ TEST(LoneBodyStepper, ALevelBodyTurningAboutItsVerticalAxisSkipsOnlyAZeroGyrosco
   EXPECT_NE(dBodyGetAngularVel(twins[1].kernel)[0], 0.0);
 }
 
+// The level body's shortcut (LoneBodyStepper::Step on a one-body robot driving level, turning
+// about its vertical principal axis) ends every step bit for bit where the stepper's general
+// way (StepAnyPose) puts it: under gravity or without, at rest and turning, with pushes in the
+// plane and torques about the vertical, and a step with no torque (the shortcut declines it).
+TEST(LoneBodyStepper, ALevelBodysShortcutEndsEveryStepWhereTheGeneralStepPutsIt) {
+  OdeLibrary ode;
+  OdeWorld shortcut_world = MakeWorld(), general_world = MakeWorld();
+  for (dWorldID w : {shortcut_world.get(), general_world.get()}) dWorldSetGravity(w, 0, 0, -9.81);
+  dMass mass;
+  dMassSetCylinderTotal(&mass, 2.5, 3, 0.09, 0.15);
+  std::vector<Twin> twins;
+  for (double yaw : {0.0, 0.4, -2.9}) {
+    Twin t{dBodyCreate(shortcut_world.get()), dBodyCreate(general_world.get())};
+    for (dBodyID b : {t.kernel, t.ode}) {
+      dBodySetMass(b, &mass);
+      dBodySetPosition(b, 0.3, -0.2, 0.05);
+      dQuaternion q = {std::cos(yaw / 2), 0, 0, std::sin(yaw / 2)};
+      dBodySetQuaternion(b, q);
+      dBodySetLinearVel(b, 1.5, 0.5, 0);
+    }
+    twins.push_back(t);
+  }
+  LoneBodyStepper shortcut, general;
+  dVector3 gravity;
+  dWorldGetGravity(shortcut_world.get(), gravity);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int step = 0; step < 400; ++step) {
+    const double fx = 20 * u(rng), fy = 20 * u(rng), tz = step % 50 == 7 ? 0.0 : u(rng);
+    for (const Twin& t : twins) {
+      for (dBodyID b : {t.kernel, t.ode}) {
+        dBodyAddForce(b, fx, fy, 2.5 * 9.81);  // carried by its wheels
+        dBodyAddTorque(b, 0, 0, tz);
+      }
+      shortcut.Step(t.kernel, gravity, kStep);
+      general.StepAnyPose(t.ode, gravity, kStep);
+      ASSERT_EQ(StateDifference(t.kernel, t.ode), "") << "step " << step;
+    }
+  }
+  EXPECT_GT(shortcut.LevelSteps(), 1100U) << "the shortcut was taken";
+  EXPECT_LT(shortcut.LevelSteps(), 1200U) << "and declined without a torque about the vertical";
+  EXPECT_EQ(general.LevelSteps(), 0U);
+  for (const Twin& t : twins) EXPECT_GT(std::abs(dBodyGetAngularVel(t.kernel)[2]), 0.01) << "it turned";
+}
+
 TEST(LoneBodyStepper, TellsTheGeometriesTheBodyMoved) {
   OdeLibrary ode;
   OdeWorld world = MakeWorld();
