@@ -144,7 +144,7 @@ inline void RotationOf(const dReal* q, dReal* r) {
 // `angular` over `dt`, in the body's own arrays (the getters' pointers are ODE's storage, not
 // copies): what dBodySetPosition and dBodySetQuaternion would store, with dDQfromW, dNormalize4
 // and dRfromQ's arithmetic written out in their order; each geometry is told that the body
-// moved, as the setters tell it (the calls were half of a lone body's step); the velocities are
+// moved, as the setters tell it (the calls were a third of a lone body's step); the velocities are
 // stored and the accumulators cleared.
 void MoveBody(dBodyID body, const BodyArrays& arrays, const dReal* linear, const dReal* angular, dReal dt) {
   auto* position = const_cast<dReal*>(dBodyGetPosition(body));
