@@ -170,7 +170,7 @@ TEST(LoneBodyStepper, ALevelBodyTurningAboutItsVerticalAxisSkipsOnlyAZeroGyrosco
 
 // The level body's shortcut (LoneBodyStepper::Step on a one-body robot driving level, turning
 // about its vertical principal axis) ends every step bit for bit where the stepper's general
-// way (StepAnyPose) puts it: under gravity or without, at rest and turning, with pushes in the
+// way (StepAnyPose) puts it: under gravity carried by its wheels, turning, with pushes in the
 // plane and torques about the vertical, and a step with no torque (the shortcut declines it).
 TEST(LoneBodyStepper, ALevelBodysShortcutEndsEveryStepWhereTheGeneralStepPutsIt) {
   OdeLibrary ode;
