@@ -11,10 +11,8 @@ if(UBERSIM_SANITIZE)
                       -fno-sanitize-recover=undefined -UNDEBUG -D_GLIBCXX_ASSERTIONS)
   add_link_options(-fsanitize=address,undefined)
   if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
-    # Bugs of other projects the checks must pass over, each with its reason in the file. Line
-    # tables are all a report's stack needs; full debug info only makes the build slower.
-    add_compile_options(-fsanitize-ignorelist=${CMAKE_CURRENT_LIST_DIR}/sanitizer_ignorelist.txt
-                        -gline-tables-only)
+    # Bugs of other projects the checks must pass over, each with its reason in the file.
+    add_compile_options(-fsanitize-ignorelist=${CMAKE_CURRENT_LIST_DIR}/sanitizer_ignorelist.txt)
   endif()
   # The runtimes' defaults, built into every executable (sanitizer_options.cpp), so a report
   # looks the same under ctest, the Python tests and a shell.
