@@ -265,7 +265,9 @@ TEST(Realism, WithEverythingOffTheFramesAreThoseOfBefore) {
   ASSERT_EQ(fa.size(), fb.size());
   for (std::size_t i = 0; i < fa.size(); ++i) {
     ASSERT_EQ(fa[i].balls.size(), fb[i].balls.size());
-    if (!fa[i].balls.empty()) EXPECT_EQ(fa[i].balls[0].x, fb[i].balls[0].x);
+    if (!fa[i].balls.empty()) {
+      EXPECT_EQ(fa[i].balls[0].x, fb[i].balls[0].x);
+    }
   }
 }
 
@@ -322,7 +324,9 @@ TEST(Realism, AnObjectsNoiseIsItsOwnWhoeverElseIsInView) {
   // Robot 0 in view has noise of its own, not robot 5's.
   const DetectedRobot* zero = report_of(with_other[0], 0);
   const DetectedRobot* five = report_of(with_other[0], 5);
-  if (zero && five) EXPECT_NE(zero->x - 2.0, five->x + 1.0);
+  if (zero && five) {
+    EXPECT_NE(zero->x - 2.0, five->x + 1.0);
+  }
 }
 
 }  // namespace

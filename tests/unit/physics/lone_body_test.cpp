@@ -278,7 +278,9 @@ TEST(InverseInertiaCache, GivesTheMassOdeStoredAndFollowsANewOne) {
     const ubersim::kernel::BodyMass got = cache.Of(b);
     EXPECT_EQ(std::memcmp(got.mass, &m, sizeof m), 0) << when;
     for (int k = 0; k < 12; ++k) {
-      if (k % 4 != 3) EXPECT_EQ(got.inverse_inertia[k], inverse[k]) << when << ", element " << k;
+      if (k % 4 != 3) {
+        EXPECT_EQ(got.inverse_inertia[k], inverse[k]) << when << ", element " << k;
+      }
     }
     EXPECT_EQ(got.inverse_mass, dRecip(m.mass)) << when;
   };
