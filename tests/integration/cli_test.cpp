@@ -77,7 +77,7 @@ TEST(Cli, ExitCodesAreTheOnesCliMdGives) {
   const fs::path world = dir / "world.yaml";
   std::ofstream(world) << "kind: world\nname: w\nfield: " << kModels << "/fields/div-b.yaml\nball: " << kModels
                        << "/balls/golf.yaml\nrobots:\n  - {team: blue, id: 0, model: robot.yaml, x: 0, y: 0}\n";
-  for (const std::string command : {"validate " + (dir / "robot.yaml").string(),
+  for (const std::string& command : {"validate " + (dir / "robot.yaml").string(),
                                     "run " + world.string() + " --fast --duration 0.1 --local-only"}) {
     const Result r = RunUbersim(command);
     EXPECT_EQ(r.exit_code, 4) << command << "\n" << r.output;
@@ -139,7 +139,7 @@ TEST(Cli, ValidateAndRunRefuseTheSameBrokenUrdf) {
   std::ofstream(world) << "kind: world\nname: w\nfield: " << kModels << "/fields/div-b.yaml\nball: " << kModels
                        << "/balls/golf.yaml\nrobots:\n  - {team: blue, id: 0, model: robot.yaml, x: 0, y: 0}\n";
   const std::string where = (dir / "bad.urdf").string() + ":2:";
-  for (const std::string command : {"validate " + (dir / "robot.yaml").string(), "validate " + world.string(),
+  for (const std::string& command : {"validate " + (dir / "robot.yaml").string(), "validate " + world.string(),
                                     "run " + world.string() + " --fast --duration 0.1 --local-only"}) {
     const Result r = RunUbersim(command);
     EXPECT_EQ(r.exit_code, 3) << command << "\n" << r.output;
