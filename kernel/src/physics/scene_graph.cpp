@@ -28,16 +28,18 @@ void RequireFinite(const Vec3& v, const char* what) {
 // ---------------------------------------------------------------------------------------------
 // BodyImpl
 
-BodyImpl::BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumulations, std::uint64_t serial)
+BodyImpl::BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& non_finite_sums, std::uint64_t serial)
     : name_(spec.name),
       mass_(spec.mass.mass),
       body_(dBodyCreate(world)),
-      accumulations_(&accumulations),
+      non_finite_sums_(&non_finite_sums),
       serial_(serial),
       position_(dBodyGetPosition(body_.get())),
       quaternion_(dBodyGetQuaternion(body_.get())),
       linear_(dBodyGetLinearVel(body_.get())),
-      angular_(dBodyGetAngularVel(body_.get())) {
+      angular_(dBodyGetAngularVel(body_.get())),
+      force_(dBodyGetForce(body_.get())),
+      torque_(dBodyGetTorque(body_.get())) {
   const MassSpec& m = spec.mass;
   if (!(m.mass > 0.0) || !std::isfinite(m.mass)) {
     throw PluginError("body '" + spec.name + "': mass must be positive and finite");
@@ -117,31 +119,39 @@ Vec3 BodyImpl::PointVelocity(const Vec3& p) const {
   return ToVec3(v);
 }
 
+void BodyImpl::CountIfNonFinite(const dReal* sum) {
+  // A sum of finite values that is not finite itself: one of them overflowed, or the value was
+  // not finite before the call. Summing first is one test for the three (a false alarm, finite
+  // values whose sum overflows, costs BodyWatch a look and no more).
+  if (!std::isfinite(sum[0] + sum[1] + sum[2])) ++*non_finite_sums_;
+}
+
 void BodyImpl::AddForce(const Vec3& f) {
   RequireFinite(f, "force");
-  ++*accumulations_;
   dBodyAddForce(body_.get(), f.x(), f.y(), f.z());
+  CountIfNonFinite(force_);
 }
 
 void BodyImpl::AddForceAtPoint(const Vec3& f, const Vec3& p) {
   RequireFinite(f, "force");
   RequireFinite(p, "force point");
-  ++*accumulations_;
   dBodyAddForceAtPos(body_.get(), f.x(), f.y(), f.z(), p.x(), p.y(), p.z());
+  CountIfNonFinite(force_);
+  CountIfNonFinite(torque_);
 }
 
 void BodyImpl::AddTorque(const Vec3& t) {
   RequireFinite(t, "torque");
-  ++*accumulations_;
   dBodyAddTorque(body_.get(), t.x(), t.y(), t.z());
+  CountIfNonFinite(torque_);
 }
 
 void BodyImpl::ApplyImpulse(const Vec3& impulse) {
   RequireFinite(impulse, "impulse");
-  ++*accumulations_;
   const Vec3 v = ToVec3(dBodyGetLinearVel(body_.get())) + impulse / mass_;
   dBodySetLinearVel(body_.get(), v.x(), v.y(), v.z());
   dBodyEnable(body_.get());
+  CountIfNonFinite(linear_);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -465,7 +475,7 @@ Body& NodeImpl::AddBody(const BodySpec& spec) {
   if (FindBody(spec.name)) {
     throw PluginError("scene node '" + Path() + "' already has a body '" + spec.name + "'");
   }
-  bodies_.push_back(std::make_unique<BodyImpl>(graph_.world(), spec, graph_.body_accumulations(), graph_.NextBodySerial()));
+  bodies_.push_back(std::make_unique<BodyImpl>(graph_.world(), spec, graph_.non_finite_sums(), graph_.NextBodySerial()));
   return *bodies_.back();
 }
 

@@ -25,7 +25,7 @@ class SceneGraph;
 class BodyImpl final : public Body {
  public:
   /// `serial` orders bodies by creation (SceneGraph::NextBodySerial).
-  BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& accumulations, std::uint64_t serial);
+  BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& non_finite_sums, std::uint64_t serial);
   const std::string& Name() const override { return name_; }
   Pose GetPose() const override;
   void SetPose(const Pose& pose) override;
@@ -47,10 +47,11 @@ class BodyImpl final : public Body {
   const dReal* position_array() const { return position_; }
   const dReal* linear_array() const { return linear_; }    ///< see position_array
   const dReal* angular_array() const { return angular_; }  ///< see position_array
-  /// How many calls, on any body of its scene graph, have added to a linear velocity, force or
-  /// torque: the only SDK writes whose result can be non-finite with finite arguments (an
-  /// overflowing sum). One counter for the graph, so a check reads one number.
-  const std::uint64_t& accumulations() const { return *accumulations_; }
+  /// How many calls, on any body of its scene graph, have left a linear velocity, force or torque
+  /// that is not finite (or may not be: see CountIfNonFinite). Adding to those is the only SDK
+  /// write whose result can be non-finite with finite arguments (an overflowing sum); each such
+  /// call checks its own sum. One counter for the graph, so a check reads one number.
+  const std::uint64_t& non_finite_sums() const { return *non_finite_sums_; }
   /// Larger for a body created later. ODE lists a world's bodies newest first, and QuickStep
   /// steps them in that order (IslandStepper::Step).
   std::uint64_t serial() const { return serial_; }
@@ -59,7 +60,10 @@ class BodyImpl final : public Body {
   std::string name_;
   double mass_;
   OdeBody body_;
-  std::uint64_t* accumulations_;  // the scene graph's
+  // Counts `sum` (a velocity, force or torque of this body, 3 values) if it is not finite.
+  void CountIfNonFinite(const dReal* sum);
+
+  std::uint64_t* non_finite_sums_;  // the scene graph's
   std::uint64_t serial_;
   // ODE's own arrays for the body (what its getters return, fixed for its life): a pose or a
   // twist read is a copy, not two calls into ODE.
@@ -67,6 +71,8 @@ class BodyImpl final : public Body {
   const dReal* quaternion_;
   const dReal* linear_;
   const dReal* angular_;
+  const dReal* force_;   // the accumulated force and torque
+  const dReal* torque_;
 };
 
 /// A geometry owned by a node, with its surface, optional directional friction and observers.
@@ -262,8 +268,8 @@ class SceneGraph {
   /// Listener hooks (used by GeomImpl).
   void NotifyGeomAdded(GeomImpl& g) { if (on_geom_added_) on_geom_added_(g); }
   void NotifyGeomRemoved(GeomImpl& g) { if (on_geom_removed_) on_geom_removed_(g); }
-  /// The counter every body of the graph adds its accumulating calls to (BodyImpl::accumulations).
-  std::uint64_t& body_accumulations() { return body_accumulations_; }
+  /// The counter every body of the graph counts its non-finite sums on (BodyImpl::non_finite_sums).
+  std::uint64_t& non_finite_sums() { return non_finite_sums_; }
   /// A new body's serial (BodyImpl::serial): one more than the last.
   std::uint64_t NextBodySerial() { return ++bodies_created_; }
   /// Bodies created so far. A body lives as long as the graph: the same count, the same bodies.
@@ -273,7 +279,7 @@ class SceneGraph {
 
  private:
   dWorldID world_;
-  std::uint64_t body_accumulations_ = 0;
+  std::uint64_t non_finite_sums_ = 0;
   std::uint64_t bodies_created_ = 0;
   std::uint64_t geoms_created_ = 0;
   std::function<void(GeomImpl&)> on_geom_added_;

@@ -187,12 +187,12 @@ void BodyWatch::Add(const BodyImpl& body) {
   for (const dReal* v : {dBodyGetLinearVel(id), dBodyGetForce(id), dBodyGetTorque(id)}) {
     vectors_.push_back(v);
   }
-  accumulations_ = &body.accumulations();
+  non_finite_sums_ = &body.non_finite_sums();
   checked_.reset();
 }
 
 bool BodyWatch::Recheck() {
-  const std::uint64_t accumulations = *accumulations_;
+  const std::uint64_t sums = *non_finite_sums_;
   // Three sums, one per component: independent additions the processor overlaps.
   dReal x = 0, y = 0, z = 0;
   for (const dReal* v : vectors_) {
@@ -205,7 +205,7 @@ bool BodyWatch::Recheck() {
       if (!Finite(v, 3)) return false;
     }
   }  // else finite values whose sum overflowed
-  checked_ = accumulations;
+  checked_ = sums;
   return true;
 }
 

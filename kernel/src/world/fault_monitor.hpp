@@ -83,21 +83,21 @@ class LastGoodState {
 
 /// Watches bodies for what a plugin call can make non-finite through the SDK, which refuses
 /// non-finite arguments: a linear velocity or an accumulated force or torque that overflows.
-/// Only the calls that add to those (BodyImpl::accumulations) can, so a check after a call when
-/// no body of the scene graph was added to reads one counter; else it is nine additions per
-/// watched body, reading ODE's storage directly.
+/// Only the calls that add to those can, and each counts a sum it left non-finite
+/// (BodyImpl::non_finite_sums), so a check after a call reads one counter, and looks at the
+/// values (nine additions per watched body, reading ODE's storage directly) only when it moved.
 class BodyWatch {
  public:
   /// Watches `body` too (all watched bodies belong to one scene graph).
   void Add(const BodyImpl& body);
-  /// True when every watched value is finite (without looking, when nothing was added to any
-  /// body since a check that found them finite).
-  bool AllFinite() { return !accumulations_ || checked_ == *accumulations_ || Recheck(); }
+  /// True when every watched value is finite (without looking, when no body of the scene graph
+  /// was left with a non-finite sum since a check that found them finite).
+  bool AllFinite() { return !non_finite_sums_ || checked_ == *non_finite_sums_ || Recheck(); }
 
  private:
   bool Recheck();  // AllFinite's look at the values
   std::vector<const dReal*> vectors_;  // 3 values each
-  const std::uint64_t* accumulations_ = nullptr;  // the scene graph's counter
+  const std::uint64_t* non_finite_sums_ = nullptr;  // the scene graph's counter
   std::optional<std::uint64_t> checked_;          // its value when last found finite
 };
 
