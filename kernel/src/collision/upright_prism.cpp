@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace ubersim::kernel {
@@ -64,6 +65,13 @@ bool MakeStanding(const FlatFrontPrism& p, const Pose& pose, Standing& s) {
   s.z_low = pose.position.z() - p.half_height * up.z();   // the caps' centres
   s.z_high = pose.position.z() + p.half_height * up.z();
   return true;
+}
+
+// Whether two cross-sections of one shell lie at the same place, to the bit: TouchAt is a
+// function of its outlines alone, so a level whose outlines are bit for bit the other's touches
+// as it does (two shells both standing straight, as one-body robots always do: half the work).
+bool SameCentre(const Outline& x, const Outline& y) {
+  return std::memcmp(x.centre.data(), y.centre.data(), 2 * sizeof(double)) == 0;
 }
 
 // How far A and B overlap along unit n (A's farthest point along n minus B's nearest): the
@@ -383,8 +391,13 @@ int CollideUprightPrisms(const FlatFrontPrism& pa_shape, const Pose& pa, const F
   // leans): each touching one gives its contacts there.
   Levels levels;
   levels.heights = {z_low, z_high};
-  for (std::size_t h = 0; h < 2; ++h) {
-    if (!TouchAt(a.At(levels.heights[h]), b.At(levels.heights[h]), levels.touches[h])) levels.touches[h].spot_count = 0;
+  const Outline a_low = a.At(z_low), b_low = b.At(z_low);
+  if (!TouchAt(a_low, b_low, levels.touches[0])) levels.touches[0].spot_count = 0;
+  const Outline a_high = a.At(z_high), b_high = b.At(z_high);
+  if (SameCentre(a_high, a_low) && SameCentre(b_high, b_low)) {
+    levels.touches[1] = levels.touches[0];  // standing straight: the same cross-sections, the same touch
+  } else if (!TouchAt(a_high, b_high, levels.touches[1])) {
+    levels.touches[1].spot_count = 0;
   }
   SharedNormal(a, b, levels);
   NearLevel(a, [&b](double z) { return b.At(z); }, levels);
