@@ -521,6 +521,8 @@ void CollisionManager::GroupForField() {
     const auto [it, added] = group_of.emplace(key, field_groups_.size());
     if (added) field_groups_.emplace_back();
     FieldGroup& group = field_groups_[it->second];
+    group.robot = g->robot();
+    if (g->robot() && g->hull()) group.hulls.push_back(group.geoms.size());
     group.geoms.push_back(BoxInBodyFrame(*g));
     // How far this geometry reaches from its body's origin; a little more, for the rounding.
     const dBodyID body = g->body()->id();
@@ -539,10 +541,12 @@ void CollisionManager::GroupForField() {
       FieldGeom cover{nullptr, group.geoms.front().position, group.geoms.front().rotation, Vec3::Zero(),
                       Vec3::Constant(-1.0)};
       Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+      bool all_covered = true;
       for (std::size_t i = 0; i < group.geoms.size(); ++i) {
         const FieldGeom& g = group.geoms[i];
         if (!MayEverCollide(*g.geom, *field_planes_[p].geom)) continue;
         const bool covered = !IsSphere(*g.geom) && g.position == cover.position;
+        all_covered = all_covered && covered;
         group.on_planes.push_back({p, i, covered});
         if (covered) {
           lo = lo.cwiseMin(g.centre - g.half);
@@ -554,6 +558,7 @@ void CollisionManager::GroupForField() {
         cover.half = 0.5 * (hi - lo);
       }
       group.plane_covers.push_back(cover);
+      group.all_covered.push_back(all_covered);
     }
   }
   FindStaticsFreeRectangle();
@@ -645,6 +650,14 @@ void CollisionManager::ForEachFieldPair(F& f) {
       FieldGroup& b = field_groups_[field_order_[j]];
       if (b.lo[0] > a.hi[0]) break;  // every later box starts farther along x
       if (!b.active || b.lo[1] > a.hi[1] || a.lo[1] > b.hi[1] || b.lo[2] > a.hi[2] || a.lo[2] > b.hi[2]) continue;
+      if (a.robot && b.robot) {
+        // Two robots (two groups, two robots) meet through their shells alone: the same pairs
+        // in the same order as every part against every part, without the refusals.
+        for (const std::size_t ia : a.hulls) {
+          for (const std::size_t ib : b.hulls) pair_up(*a.geoms[ia].geom, *b.geoms[ib].geom);
+        }
+        continue;
+      }
       for (const FieldGeom& ga : a.geoms) {
         for (const FieldGeom& gb : b.geoms) pair_up(*ga.geom, *gb.geom);
       }
@@ -667,12 +680,15 @@ void CollisionManager::ForEachFieldPair(F& f) {
     // A plane's box is infinite: every geometry meets it in the narrow phase (which drops what
     // lies wholly on its free side).
     // A cover above its plane by more than rounding holds every box inside it above too.
+    bool all_above = true;  // every geometry that may meet a plane is in a cover above it
     for (std::size_t p = 0; p < field_planes_.size(); ++p) {
       const FieldGeom& c = group.plane_covers[p];
       const FieldPlane& plane = field_planes_[p];
       cover_above_[p] = c.half.x() >= 0 &&
                         BodyBoxAbovePlane(c.position, c.rotation, c.centre, c.half, plane.normal, plane.offset + 1e-9);
+      all_above = all_above && cover_above_[p] && group.all_covered[p];
     }
+    if (all_above) continue;  // a one-body robot on the carpet, most steps
     // A sphere goes straight to the narrow phase, whose exact test is as cheap as the box's.
     for (const FieldGroup::OnPlane& on : group.on_planes) {
       const FieldPlane& plane = field_planes_[on.plane];

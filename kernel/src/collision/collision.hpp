@@ -242,6 +242,10 @@ class CollisionManager {
   // reach from it (rigid: measured once, when grouped).
   struct FieldGroup {
     std::vector<FieldGeom> geoms;
+    // A robot's group: its shells (indices into geoms), all of it another robot may meet
+    // (MayEverCollide). Null robot: a loose body's group.
+    const NodeImpl* robot = nullptr;
+    std::vector<std::size_t> hulls;
     std::vector<std::pair<dBodyID, double>> bodies;  // body, reach (m)
     struct OnPlane {
       std::size_t plane, geom;  // indices into field_planes_, geoms
@@ -252,6 +256,7 @@ class CollisionManager {
     // that are no spheres (a robot's shell and dribbler): a robot standing on its wheels is
     // above the carpet by that one test. Empty (half < 0) when there is none.
     std::vector<FieldGeom> plane_covers;
+    std::vector<char> all_covered;  // per plane: every geometry that may meet it is in its cover
     double lo[3], hi[3];                              // this step's box
     bool active = false;                              // any geometry collides
   };
