@@ -226,7 +226,7 @@ void RandomTeleports::Teleport(TeleportKind kind) {
         const RobotId a = RandomRobot();
         const double yaw = angle(rng_);
         const auto hull = [&](const Vec3& towards) { return HullReach(a, yaw, std::atan2(towards.y(), towards.x())); };
-        Vec3 normal;
+        Vec3 normal = Vec3::Zero();  // set by against_wall when it finds a spot
         const std::optional<Vec3> p = against_wall(hull, wall_overlap_, normal);
         if (!p || TrapsBall(a, *p, yaw, ball) || !Resolvable(*p, robot_radius_)) continue;
         post_moving(a, *p, yaw, -normal);
@@ -252,7 +252,7 @@ void RandomTeleports::Teleport(TeleportKind kind) {
         return;
       }
       case TeleportKind::kBallIntoWall: {
-        Vec3 normal;
+        Vec3 normal = Vec3::Zero();  // set by against_wall when it finds a spot
         // The ball is a solid sphere to the collision code: up to its radius, its centre in front.
         const std::optional<Vec3> p = against_wall([&](const Vec3&) { return ball_radius_; }, 1.0, normal);
         if (!p || InsideARobot(*p, s)) continue;
