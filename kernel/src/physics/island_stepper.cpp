@@ -166,10 +166,12 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     dBodyID b = bodies[i];
     if (!dBodyIsEnabled(b)) continue;
-    const LoggedContact* kept = static_contacts_ ? static_contacts_->Kept(b) : nullptr;
     if (!InPass(i, pass)) {
       paused_.push_back(b);
-    } else if (kept && IsStaticContactIsland(b, kept)) {
+      continue;
+    }
+    const LoggedContact* kept = static_contacts_ ? static_contacts_->Kept(b) : nullptr;
+    if (kept && IsStaticContactIsland(b, kept)) {
       own_.push_back({b, kept});
       ++on_field;
     } else if (!kept && IsLoneBody(b)) {
