@@ -376,7 +376,7 @@ bool CollisionManager::MayEverCollide(const GeomImpl& a, const GeomImpl& b) {
   // hull; they touch another robot's parts only when the hulls overlap deeply (a teleport, a
   // pile-up), and then in arbitrary directions: in the soak such contacts lifted a robot onto
   // another and over the wall.
-  if (a.robot() && b.robot() && a.robot() != b.robot() && !(a.hull() && b.hull())) return false;
+  if (a.robot() && b.robot() && a.robot() != b.robot() && !(MeetsOtherRobots(a) && MeetsOtherRobots(b))) return false;
   const NodeImpl* na = &a.owner();
   const NodeImpl* nb = &b.owner();
   return !IsAncestorOrSelf(na, nb) && !IsAncestorOrSelf(nb, na);
@@ -522,7 +522,7 @@ void CollisionManager::GroupForField() {
     if (added) field_groups_.emplace_back();
     FieldGroup& group = field_groups_[it->second];
     group.robot = g->robot();
-    if (g->robot() && g->hull()) group.hulls.push_back(group.geoms.size());
+    if (g->robot() && MeetsOtherRobots(*g)) group.hulls.push_back(group.geoms.size());
     group.geoms.push_back(BoxInBodyFrame(*g));
     // How far this geometry reaches from its body's origin; a little more, for the rounding.
     const dBodyID body = g->body()->id();

@@ -173,6 +173,9 @@ class CollisionManager {
   static bool MayCollide(const GeomImpl& a, const GeomImpl& b);
   /// MayCollide while both take part in collisions: the rules that never change for a pair.
   static bool MayEverCollide(const GeomImpl& a, const GeomImpl& b);
+  /// Whether a robot's geometry `g` may meet another robot's at all: its shell only
+  /// (MayEverCollide's rule; the field broadphase pairs two robots through these alone).
+  static bool MeetsOtherRobots(const GeomImpl& g) { return g.hull(); }
 
  private:
   void Narrow(GeomImpl& a, GeomImpl& b);
@@ -243,7 +246,7 @@ class CollisionManager {
   struct FieldGroup {
     std::vector<FieldGeom> geoms;
     // A robot's group: its shells (indices into geoms), all of it another robot may meet
-    // (MayEverCollide). Null robot: a loose body's group.
+    // (MeetsOtherRobots). Null robot: a loose body's group.
     const NodeImpl* robot = nullptr;
     std::vector<std::size_t> hulls;
     std::vector<std::pair<dBodyID, double>> bodies;  // body, reach (m)
