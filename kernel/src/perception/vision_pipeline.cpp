@@ -16,8 +16,13 @@ namespace {
 std::int64_t Ns(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e9)); }
 
 double WrapAngle(double a) {
-  a = std::fmod(a + M_PI, 2 * M_PI);
-  if (a < 0) a += 2 * M_PI;
+  a += M_PI;
+  // fmod returns an a in [0, 2π) as it is: the call (most of this function's cost) is needed
+  // only outside, and the result is the same to the bit either way.
+  if (!(a >= 0 && a < 2 * M_PI)) {
+    a = std::fmod(a, 2 * M_PI);
+    if (a < 0) a += 2 * M_PI;
+  }
   return a - M_PI;
 }
 
@@ -261,6 +266,7 @@ VisionFrame PerceptionPipeline::Frame(std::size_t index, const WorldSnapshot& tr
   // Each object's random numbers come from its own stream (ObjectDraws), drawn in a fixed order
   // whether or not they are used; what a setting adds is drawn only when it is on.
   const BallState& b = truth.ball;
+  f.robots.reserve(truth.robots.size());  // grown once, not doubled from one
   ObjectDraws ball_draws(frame_key, 0);
   const bool ball_in_view = Sees(cam, b.pose.position.x(), b.pose.position.y());
   const double ball_noise_x = ball_in_view ? unit_noise(ball_draws) : 0.0;

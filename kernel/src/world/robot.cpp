@@ -459,13 +459,17 @@ void Robot::SetPresent(bool present) {
 
 RobotState Robot::Kinematics() const {
   RobotState s;
+  WriteKinematics(s);
+  return s;
+}
+
+void Robot::WriteKinematics(RobotState& s) const {
   s.id = id_;
   s.present = present_;
   s.pose = chassis_->GetPose();
   s.twist = chassis_->GetTwist();
   s.radius = model_->body.radius;
   s.height = model_->body.height;
-  return s;
 }
 
 bool Robot::TouchesBall() const {

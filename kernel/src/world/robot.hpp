@@ -78,6 +78,8 @@ class Robot {
   /// Ground truth without what its parts report (no dribbler contact, kicker charge or drive
   /// feedback): where it is and how it moves, for the cameras.
   RobotState Kinematics() const;
+  /// Kinematics() written into `s`, a default RobotState (a snapshot's, built in place).
+  void WriteKinematics(RobotState& s) const;
 
   /// Reports and puts back the robot's non-finite bodies, found in `step` where no plugin call
   /// can be blamed (`when`: "after the physics step", …; `what`: the state check's finding). A

@@ -1008,10 +1008,17 @@ WorldSnapshot WorldImpl::Snapshot(bool parts) const {
   s.ball.pose = ball_->GetPose();
   s.ball.twist = ball_->GetTwist();
   s.ball.radius = model_.ball->radius;
-  s.robots.reserve(robots_.size());
+  // Built in place: a state moved into the list and the moved-from one destroyed cost more
+  // than filling it (a snapshot is taken every other step, for the cameras and for the teams).
+  s.robots.resize(robots_.size());
   for (std::size_t i = 0; i < robots_.size(); ++i) {
-    s.robots.push_back(parts ? robots_[i]->State() : robots_[i]->Kinematics());
-    s.robots.back().feedback_lost = i < responses_lost_.size() && responses_lost_[i];
+    RobotState& r = s.robots[i];
+    if (parts) {
+      r = robots_[i]->State();
+    } else {
+      robots_[i]->WriteKinematics(r);
+    }
+    r.feedback_lost = i < responses_lost_.size() && responses_lost_[i];
   }
   // Blue first, then yellow, each by id (robots that came on later are last in robots_). Most
   // snapshots find them in that order already: checked first, since sorting moves whole states.
