@@ -110,15 +110,22 @@ void IslandStepper::GroupByDemand(const std::vector<dBodyID>& bodies, const std:
       });
     }
   }
-  group_.assign(bodies.size(), -1);
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    for (const auto& m : marked_) {
-      if (m.first == bodies[i]) {
-        group_[i] = m.second;
+  // Every body not reached from a seed takes the other islands' count: the pass after the
+  // seeds' (pass_of adds it, if no seed has that count), as it always came.
+  bool unmarked = marked_.size() < bodies.size();
+  if (!unmarked) {
+    for (dBodyID b : bodies) {
+      if (!marked(b)) {
+        unmarked = true;
         break;
       }
     }
-    if (group_[i] < 0) group_[i] = pass_of(other_iterations_);
+  }
+  group_.assign(bodies.size(), unmarked ? pass_of(other_iterations_) : -1);
+  // The few marked bodies looked up in the list, not the list in them (each body is listed once).
+  for (const auto& [body, pass] : marked_) {
+    const auto at = std::find(bodies.begin(), bodies.end(), body);
+    if (at != bodies.end()) group_[static_cast<std::size_t>(at - bodies.begin())] = pass;
   }
 }
 

@@ -27,14 +27,6 @@ void InverseOf(const dMatrix3 inertia, dMatrix3 inverse) {
   if (dInvertPDMatrix(inertia, inverse, 3) == 0) dRSetIdentity(inverse);
 }
 
-// Where ODE keeps `body`'s mass, inverse inertia and inverse mass if its dxBody is laid out as
-// mass, invI, invMass, then the position (InverseInertiaCache checks that it is).
-BodyMass StoredIn(dBodyID body) {
-  const dReal* inverse_mass = dBodyGetPosition(body) - 1;
-  const dReal* inverse = inverse_mass - 12;
-  return {reinterpret_cast<const dMass*>(inverse - sizeof(dMass) / sizeof(dReal)), inverse, *inverse_mass};
-}
-
 }  // namespace
 
 BodyMass InverseInertiaCache::Of(dBodyID body) {
@@ -52,7 +44,7 @@ BodyMass InverseInertiaCache::Of(dBodyID body) {
       Entry e{body, false, {}, {}, {}};
       dBodyGetMass(body, &e.mass);
       InverseOf(e.mass.I, e.inverse);
-      const BodyMass stored = StoredIn(body);
+      const BodyMass stored = StoredAt(dBodyGetPosition(body));
       const dReal expected_inverse_mass = dRecip(e.mass.mass);
       e.in_place = std::memcmp(stored.mass, &e.mass, sizeof(dMass)) == 0 &&
                    std::memcmp(stored.inverse_inertia, e.inverse, sizeof(dMatrix3)) == 0 &&
@@ -63,7 +55,7 @@ BodyMass InverseInertiaCache::Of(dBodyID body) {
   }
   next_ = at + 1;
   Entry& e = entries_[at];
-  if (e.in_place) return StoredIn(body);
+  if (e.in_place) return StoredAt(dBodyGetPosition(body));
   // Checked against the inertia it came from: a pure function of it.
   dBodyGetMass(body, &e.mass);
   if (std::memcmp(e.inertia, e.mass.I, sizeof e.inertia) != 0) {
@@ -141,20 +133,19 @@ inline void RotationOf(const dReal* q, dReal* r) {
 }
 
 // The end of every step of a free body: its pose moves with its new velocities `linear` and
-// `angular` over `dt`, in the body's own arrays (the getters' pointers are ODE's storage, not
-// copies): what dBodySetPosition and dBodySetQuaternion would store, with dDQfromW, dNormalize4
+// `angular` over `dt`, in the body's own arrays (`position`, `q` and `rotation`: the getters'
+// pointers, ODE's storage, not copies): what dBodySetPosition and dBodySetQuaternion would store, with dDQfromW, dNormalize4
 // and dRfromQ's arithmetic written out in their order; each geometry is told that the body
 // moved, as the setters tell it (the calls were a third of a lone body's step); the velocities are
 // stored and the accumulators cleared.
-void MoveBody(dBodyID body, const BodyArrays& arrays, const dReal* linear, const dReal* angular, dReal dt) {
-  auto* position = const_cast<dReal*>(dBodyGetPosition(body));
+void MoveBody(dBodyID body, dReal* position, dReal* q, dReal* rotation, const BodyArrays& arrays, const dReal* linear,
+              const dReal* angular, dReal dt) {
   for (int k = 0; k < 3; ++k) position[k] += dt * linear[k];
-  auto* q = const_cast<dReal*>(dBodyGetQuaternion(body));
   dReal dq[4];
   QuaternionRate(angular, q, dq);
   for (int k = 0; k < 4; ++k) q[k] += dt * dq[k];
   NormaliseQuaternion(q);
-  RotationOf(q, const_cast<dReal*>(dBodyGetRotation(body)));
+  RotationOf(q, rotation);
   for (dGeomID g = dBodyGetFirstGeom(body); g; g = dGeomGetBodyNext(g)) dGeomMoved(g);
 
   for (int k = 0; k < 3; ++k) {
@@ -176,7 +167,8 @@ void FinishBodyStep(dBodyID body, const BodyArrays& arrays, dReal inverse_mass, 
   }
   dMultiplyAdd0_331(angular, inverse_inertia, torque);
 
-  MoveBody(body, arrays, linear, angular, dt);
+  MoveBody(body, const_cast<dReal*>(dBodyGetPosition(body)), const_cast<dReal*>(dBodyGetQuaternion(body)),
+           const_cast<dReal*>(dBodyGetRotation(body)), arrays, linear, angular, dt);
 }
 
 bool LoneBodyStepper::StepLevel(dBodyID body, const dReal* gravity, dReal dt) {
@@ -194,7 +186,8 @@ bool LoneBodyStepper::StepLevel(dBodyID body, const dReal* gravity, dReal dt) {
       !positive_zero(w[0]) || !positive_zero(w[1]) || t[0] != 0 || t[1] != 0) {
     return false;
   }
-  const BodyMass m = inverse_inertia_.Of(body);
+  auto* position = const_cast<dReal*>(dBodyGetPosition(body));
+  const BodyMass m = inverse_inertia_.Of(body, position);
   const dReal* inverse = m.inverse_inertia;
   const dReal turn = inverse[10] * (t[2] * dt);
   // The vertical a principal axis (the general step skips the zero gyroscopic torque only
@@ -218,7 +211,7 @@ bool LoneBodyStepper::StepLevel(dBodyID body, const dReal* gravity, dReal dt) {
   angular[0] = w[0];
   angular[1] = w[1];
   angular[2] = w[2] + turn;
-  MoveBody(body, arrays, linear, angular, dt);
+  MoveBody(body, position, const_cast<dReal*>(q), const_cast<dReal*>(rotation), arrays, linear, angular, dt);
   ++level_steps_;
   return true;
 }

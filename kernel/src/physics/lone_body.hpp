@@ -35,8 +35,25 @@ class InverseInertiaCache {
  public:
   /// `body`'s mass, inverse inertia and inverse mass, as dBodySetMass stored them.
   BodyMass Of(dBodyID body);
+  /// Of(body) for a body whose position array (dBodyGetPosition's) is `position`.
+  BodyMass Of(dBodyID body, const dReal* position) {
+    // The step before's order, in ODE's storage: most lookups end here.
+    if (next_ < entries_.size() && entries_[next_].body == body && entries_[next_].in_place) {
+      ++next_;
+      return StoredAt(position);
+    }
+    return Of(body);
+  }
 
  private:
+  /// Where ODE keeps the mass, inverse inertia and inverse mass of the body whose position array
+  /// is `position`, if its dxBody is laid out as mass, invI, invMass, then the position.
+  static BodyMass StoredAt(const dReal* position) {
+    const dReal* inverse_mass = position - 1;
+    const dReal* inverse = inverse_mass - 12;
+    return {reinterpret_cast<const dMass*>(inverse - sizeof(dMass) / sizeof(dReal)), inverse, *inverse_mass};
+  }
+
   struct Entry {
     dBodyID body;
     bool in_place;      // ODE's own storage checked: read there

@@ -457,6 +457,8 @@ void WorldImpl::ApplyEvents(bool stepping) {
           using T = std::decay_t<decltype(ev)>;
           if constexpr (std::is_same_v<T, QueryEvent>) {
             pending_queries_.push_back(std::move(ev));
+          } else if constexpr (std::is_same_v<T, CommandEvent>) {
+            Apply(std::move(ev));  // drained_ is cleared below: the command itself goes on
           } else {
             Apply(ev);
           }
@@ -575,7 +577,7 @@ void WorldImpl::Apply(const PositionEvent& e) {
   reply();
 }
 
-void WorldImpl::Apply(const CommandEvent& e) {
+void WorldImpl::Apply(CommandEvent&& e) {
   ++event_counters_.commands_received[e.robot.team == Team::kBlue ? 0 : 1];
   Robot* r = FindRobot(e.robot, sent_hint_);
   if (!r) {
@@ -607,7 +609,7 @@ void WorldImpl::Apply(const CommandEvent& e) {
                    "command for robot " + ToString(e.robot) + " with non-finite values ignored", sim_time_ns_);
     return;
   }
-  if (!radio_.Send(e, sim_time_ns_)) ++event_counters_.lost;
+  if (!radio_.Send(std::move(e), sim_time_ns_)) ++event_counters_.lost;
 }
 
 namespace {

@@ -134,7 +134,7 @@ class WorldImpl {
   void PublishGroundTruth();
   void ApplyEvents(bool stepping);
   void Apply(const PositionEvent& e);
-  void Apply(const CommandEvent& e);
+  void Apply(CommandEvent&& e);  // moved on into the radio
   void Deliver(const CommandEvent& e);
   void Apply(const ClockEvent& e);
   void Apply(const RealismEvent& e);
