@@ -46,6 +46,14 @@ constexpr int kMaxWheels = 8;
 using WheelSpeeds = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxWheels, 1>;          // one per wheel
 using WheelsToVelocity = Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxWheels>;     // 3 × wheels
 
+// The wheels' planar numbers (Wheel's), one array per number: the per-step loops read them
+// lane by lane.
+struct WheelColumns {
+  double tangent_x[kMaxWheels] = {}, tangent_y[kMaxWheels] = {};
+  double axle_x[kMaxWheels] = {}, axle_y[kMaxWheels] = {};
+  double roll_lever[kMaxWheels] = {}, axle_lever[kMaxWheels] = {};
+};
+
 struct Wheel {
   Vec3 centre;        // wheel centre in the chassis frame (origin at the centre of mass), m
   Vec3 tangent;       // rolling direction in the robot frame (counter-clockwise)
@@ -143,6 +151,12 @@ class OmniForceDrive final : public ubersim::Drive {
       w.axle_y = w.tangent.x();
       w.roll_lever = w.centre.x() * w.tangent.y() - w.centre.y() * w.tangent.x();
       w.axle_lever = w.centre.x() * w.axle_y - w.centre.y() * w.axle_x;
+      columns_.tangent_x[i] = w.tangent.x();
+      columns_.tangent_y[i] = w.tangent.y();
+      columns_.axle_x[i] = w.axle_x;
+      columns_.axle_y[i] = w.axle_y;
+      columns_.roll_lever[i] = w.roll_lever;
+      columns_.axle_lever[i] = w.axle_lever;
     }
     // The robot's velocity from its wheel speeds (odometry, as omni): the least-squares inverse of
     // the wheel speeds a velocity asks for.
@@ -277,11 +291,11 @@ class OmniForceDrive final : public ubersim::Drive {
       const double lx = c * set.linear.x() - s * set.linear.y();
       const double ly = s * set.linear.x() + c * set.linear.y();
       double peak = 0.0;
+      const WheelColumns& cols = columns_;
       for (std::size_t i = 0; i < n; ++i) {
-        const Wheel& w = wheels_[i];
-        surface[i] = w.tangent.x() * lx + w.tangent.y() * ly + w.roll_lever * spin;
-        peak = std::max(peak, std::abs(surface[i]));
+        surface[i] = cols.tangent_x[i] * lx + cols.tangent_y[i] * ly + cols.roll_lever[i] * spin;
       }
+      for (std::size_t i = 0; i < n; ++i) peak = std::max(peak, std::abs(surface[i]));
       // Keep the direction when a wheel would exceed its speed: scale all wheels together.
       const double max_surface = max_wheel_speed_ * wheel_radius_;
       if (peak > max_surface) {
@@ -348,17 +362,26 @@ class OmniForceDrive final : public ubersim::Drive {
     const double u = hx * twist.linear.x() + hy * twist.linear.y();
     const double v = hx * twist.linear.y() - hy * twist.linear.x();
     const double spin = twist.angular.z();
-    double fx = 0.0, fy = 0.0, torque = 0.0;  // robot frame
-    for (std::size_t i = 0; i < wheels_.size(); ++i) {
-      const Wheel& w = wheels_[i];
+    // Each wheel's push first, wheel by wheel in arrays the compiler steps through two lanes at
+    // a time; then the sums, in wheel order (the same additions in the same order as one loop).
+    const WheelColumns& cols = columns_;
+    const std::size_t count = std::min(wheels_.size(), static_cast<std::size_t>(kMaxWheels));
+    double push_x[kMaxWheels], push_y[kMaxWheels], push_turn[kMaxWheels];
+    for (std::size_t i = 0; i < count; ++i) {
       // The contact point's velocity along the rolling direction and along the axle.
-      const double along = w.tangent.x() * u + w.tangent.y() * v + w.roll_lever * spin;
-      const double across = w.axle_x * u + w.axle_y * v + w.axle_lever * spin;
+      const double along = cols.tangent_x[i] * u + cols.tangent_y[i] * v + cols.roll_lever[i] * spin;
+      const double across = cols.axle_x[i] * u + cols.axle_y[i] * v + cols.axle_lever[i] * spin;
       const double drive = std::clamp(gain * (surface[i] - along), -drive_limit, drive_limit);
       const double roller = std::clamp(-gain * across, -roller_limit, roller_limit);
-      fx += w.tangent.x() * drive + w.axle_x * roller;
-      fy += w.tangent.y() * drive + w.axle_y * roller;
-      torque += w.roll_lever * drive + w.axle_lever * roller;
+      push_x[i] = cols.tangent_x[i] * drive + cols.axle_x[i] * roller;
+      push_y[i] = cols.tangent_y[i] * drive + cols.axle_y[i] * roller;
+      push_turn[i] = cols.roll_lever[i] * drive + cols.axle_lever[i] * roller;
+    }
+    double fx = 0.0, fy = 0.0, torque = 0.0;  // robot frame
+    for (std::size_t i = 0; i < count; ++i) {
+      fx += push_x[i];
+      fy += push_y[i];
+      torque += push_turn[i];
     }
     chassis.AddForce(Vec3(hx * fx - hy * fy, hy * fx + hx * fy, 0.0) - mass * gravity);
     chassis.AddTorque(Vec3(0.0, 0.0, torque));
@@ -366,6 +389,7 @@ class OmniForceDrive final : public ubersim::Drive {
 
   ubersim::RobotContext* ctx_ = nullptr;
   std::vector<Wheel> wheels_;  // sized once in Configure: the contact handlers hold indices
+  WheelColumns columns_;       // the wheels' planar numbers, one array each (Configure's)
   WheelsToVelocity inverse_;   // (forward, left, angular) = inverse_ · wheel speeds
   double wheel_radius_ = 0.029;
   double distance_ = 0.08;

@@ -105,8 +105,9 @@ class SolenoidKicker final : public ubersim::Kicker {
   }
 
   bool TryFire() {
+    if (!armed_) return false;  // most steps: nothing to ask the world
     ubersim::Body* ball = ctx_->Ball();
-    if (!armed_ || !ball || !Ready() || !BallInZone(*ball)) return false;
+    if (!ball || !Ready() || !BallInZone(*ball)) return false;
     ubersim::Body& chassis = ctx_->Chassis();
     const double yaw = chassis.GetPose().Yaw();
     const double elevation = chip_ ? chip_angle_ : 0.0;
