@@ -114,7 +114,9 @@ inline void NormaliseQuaternion(dReal* q) {
 }
 
 // The rotation matrix (ODE's 3×4) of the unit quaternion `q`, as ODE's dRfromQ computes it.
-inline void RotationOf(const dReal* q, dReal* r) {
+inline void RotationOf(const dReal* quaternion, dReal* r) {
+  // Read once: every store into r could otherwise be a store into the quaternion.
+  const dReal q[4] = {quaternion[0], quaternion[1], quaternion[2], quaternion[3]};
   const dReal qq1 = 2 * q[1] * q[1];
   const dReal qq2 = 2 * q[2] * q[2];
   const dReal qq3 = 2 * q[3] * q[3];
@@ -141,11 +143,15 @@ inline void RotationOf(const dReal* q, dReal* r) {
 void MoveBody(dBodyID body, dReal* position, dReal* q, dReal* rotation, const BodyArrays& arrays, const dReal* linear,
               const dReal* angular, dReal dt) {
   for (int k = 0; k < 3; ++k) position[k] += dt * linear[k];
+  // The turn and the orientation in locals: ODE's arrays are written once, at the end.
+  const dReal w[3] = {angular[0], angular[1], angular[2]};
+  dReal turned[4] = {q[0], q[1], q[2], q[3]};
   dReal dq[4];
-  QuaternionRate(angular, q, dq);
-  for (int k = 0; k < 4; ++k) q[k] += dt * dq[k];
-  NormaliseQuaternion(q);
-  RotationOf(q, rotation);
+  QuaternionRate(w, turned, dq);
+  for (int k = 0; k < 4; ++k) turned[k] += dt * dq[k];
+  NormaliseQuaternion(turned);
+  for (int k = 0; k < 4; ++k) q[k] = turned[k];
+  RotationOf(turned, rotation);
   for (dGeomID g = dBodyGetFirstGeom(body); g; g = dGeomGetBodyNext(g)) dGeomMoved(g);
 
   for (int k = 0; k < 3; ++k) {
