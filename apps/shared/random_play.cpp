@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "ubersim/kernel/field.hpp"
 
@@ -74,7 +75,7 @@ bool RandomPlay::BeforeStep() {
       c.move = GlobalVelocityCommand{to.x() * v, to.y() * v, p.turn};
       if (p.dribbler) c.dribbler_speed = 100.0;
       if (p.kicker && kick(rng_)) c.kick = KickCommand{4.0, 0.0};
-      world_.events().Post(c);
+      world_.events().Post(std::move(c));
     }
   }
   if (now >= next_ball_ns_) {

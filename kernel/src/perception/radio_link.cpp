@@ -36,7 +36,7 @@ void RadioLink::Configure(const RadioModel& model) {
   latency_ns_ = Ns(model_.latency);
 }
 
-bool RadioLink::Send(CommandEvent command, std::int64_t now_ns) {
+bool RadioLink::Send(CommandEvent&& command, std::int64_t now_ns) {
   if (model_.loss > 0 && std::uniform_real_distribution<double>(0.0, 1.0)(rng_) < model_.loss) return false;
   queue_.emplace_back(now_ns + latency_ns_, std::move(command));
   return true;

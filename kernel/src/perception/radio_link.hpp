@@ -19,7 +19,7 @@ class RadioLink {
  public:
   RadioLink(RadioModel model, std::uint64_t seed);
   /// A command arriving at `now_ns`: false when the radio loses it, else it is queued.
-  bool Send(CommandEvent command, std::int64_t now_ns);
+  bool Send(CommandEvent&& command, std::int64_t now_ns);
   /// Commands due by `now_ns`, in arrival order.
   std::vector<CommandEvent> Deliver(std::int64_t now_ns);
   /// The oldest queued command if it is due by `now_ns` (it stays queued until PopDue), else
