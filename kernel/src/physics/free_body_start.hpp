@@ -19,22 +19,21 @@ struct FreeBodyStart {
   dVector3 angular{};               ///< angular velocity, rad/s
   dMatrix3 inverse_inertia{};       ///< world frame
   dReal inverse_mass = 0;           ///< 1/kg, as dBodySetMass stored it
-  BodyArrays arrays;                ///< the body's own velocity and accumulator arrays
+  BodyStorage storage;              ///< the body's own arrays
 };
 
 /// Reads `body` under `gravity` (the world's, m/s²) as QuickStep's stage 0 does, operation for
 /// operation; the gyroscopic torque is left to the caller.
 inline void StartFreeBodyStep(dBodyID body, const dReal* gravity, InverseInertiaCache& cache, FreeBodyStart& s) {
-  const BodyMass m = cache.Of(body);
+  const BodyMass m = cache.Of(body, s.storage);  // the arrays too: no getter calls
   s.mass = m.mass;
-  s.rotation = dBodyGetRotation(body);
-  // Each getter once: they are calls into ODE, which the loop cannot hoist by itself.
-  s.arrays = BodyArrays::Of(body);
+  s.rotation = s.storage.rotation;
+  const BodyArrays& arrays = s.storage.arrays;
   for (int k = 0; k < 3; ++k) {
-    s.force[k] = s.arrays.force[k];
-    s.torque[k] = s.arrays.torque[k];
-    s.linear[k] = s.arrays.linear[k];
-    s.angular[k] = s.arrays.angular[k];
+    s.force[k] = arrays.force[k];
+    s.torque[k] = arrays.torque[k];
+    s.linear[k] = arrays.linear[k];
+    s.angular[k] = arrays.angular[k];
   }
   if (dBodyGetGravityMode(body)) {
     // Only the non-zero components: adding m·0 would turn a -0 force into +0.
@@ -72,7 +71,7 @@ inline void FinishConstrainedBodyStep(dBodyID body, FreeBodyStart& s, const dRea
     s.linear[k] += dt * velocity_change[k];
     s.angular[k] += dt * velocity_change[3 + k];
   }
-  FinishBodyStep(body, s.arrays, s.inverse_mass, s.inverse_inertia, s.force, s.torque, s.linear, s.angular, dt);
+  FinishBodyStep(body, s.storage, s.inverse_mass, s.inverse_inertia, s.force, s.torque, s.linear, s.angular, dt);
 }
 
 }  // namespace ubersim::kernel

@@ -29,35 +29,36 @@ void InverseOf(const dMatrix3 inertia, dMatrix3 inverse) {
 
 }  // namespace
 
-BodyMass InverseInertiaCache::Of(dBodyID body) {
-  std::size_t at = next_ < entries_.size() && entries_[next_].body == body ? next_ : entries_.size();
+InverseInertiaCache::Entry& InverseInertiaCache::FindElsewhere(dBodyID body) {
+  std::size_t at = 0;
+  while (at < entries_.size() && entries_[at].body != body) ++at;
   if (at == entries_.size()) {
-    at = 0;
-    while (at < entries_.size() && entries_[at].body != body) ++at;
-    if (at == entries_.size()) {
-      if (entries_.size() >= 4096) {  // bodies come and go: bound it
-        entries_.clear();
-        at = 0;
-      }
-      // First sight: does ODE's own storage, right before the position, hold this body's mass,
-      // inverse inertia and inverse mass? (A body ODE reuses the memory of has the same layout.)
-      Entry e{body, false, {}, {}, {}};
-      dBodyGetMass(body, &e.mass);
-      InverseOf(e.mass.I, e.inverse);
-      const BodyMass stored = StoredAt(dBodyGetPosition(body));
-      const dReal expected_inverse_mass = dRecip(e.mass.mass);
-      e.in_place = std::memcmp(stored.mass, &e.mass, sizeof(dMass)) == 0 &&
-                   std::memcmp(stored.inverse_inertia, e.inverse, sizeof(dMatrix3)) == 0 &&
-                   std::memcmp(&stored.inverse_mass, &expected_inverse_mass, sizeof(dReal)) == 0;
-      std::memcpy(e.inertia, e.mass.I, sizeof e.inertia);
-      entries_.push_back(e);
+    if (entries_.size() >= 4096) {  // bodies come and go: bound it
+      entries_.clear();
+      at = 0;
     }
+    // First sight: the arrays from the getters; and does ODE's own storage, right before the
+    // position, hold this body's mass, inverse inertia and inverse mass? (A body ODE reuses the
+    // memory of has the same layout.)
+    Entry e{body, BodyStorage::Of(body), false, {}, {}, {}};
+    dBodyGetMass(body, &e.mass);
+    InverseOf(e.mass.I, e.inverse);
+    const BodyMass stored = StoredAt(e.storage.position);
+    const dReal expected_inverse_mass = dRecip(e.mass.mass);
+    e.in_place = std::memcmp(stored.mass, &e.mass, sizeof(dMass)) == 0 &&
+                 std::memcmp(stored.inverse_inertia, e.inverse, sizeof(dMatrix3)) == 0 &&
+                 std::memcmp(&stored.inverse_mass, &expected_inverse_mass, sizeof(dReal)) == 0;
+    std::memcpy(e.inertia, e.mass.I, sizeof e.inertia);
+    entries_.push_back(e);
   }
   next_ = at + 1;
-  Entry& e = entries_[at];
-  if (e.in_place) return StoredAt(dBodyGetPosition(body));
+  return entries_[at];
+}
+
+BodyMass InverseInertiaCache::MassOf(Entry& e) {
+  if (e.in_place) return StoredAt(e.storage.position);
   // Checked against the inertia it came from: a pure function of it.
-  dBodyGetMass(body, &e.mass);
+  dBodyGetMass(e.body, &e.mass);
   if (std::memcmp(e.inertia, e.mass.I, sizeof e.inertia) != 0) {
     std::memcpy(e.inertia, e.mass.I, sizeof e.inertia);
     InverseOf(e.mass.I, e.inverse);
@@ -135,13 +136,15 @@ inline void RotationOf(const dReal* quaternion, dReal* r) {
 }
 
 // The end of every step of a free body: its pose moves with its new velocities `linear` and
-// `angular` over `dt`, in the body's own arrays (`position`, `q` and `rotation`: the getters'
-// pointers, ODE's storage, not copies): what dBodySetPosition and dBodySetQuaternion would store, with dDQfromW, dNormalize4
-// and dRfromQ's arithmetic written out in their order; each geometry is told that the body
-// moved, as the setters tell it (the calls were a third of a lone body's step); the velocities are
-// stored and the accumulators cleared.
-void MoveBody(dBodyID body, dReal* position, dReal* q, dReal* rotation, const BodyArrays& arrays, const dReal* linear,
-              const dReal* angular, dReal dt) {
+// `angular` over `dt`, in the body's own arrays (`storage`: the getters' pointers, ODE's storage,
+// not copies): what dBodySetPosition and dBodySetQuaternion would store, with dDQfromW,
+// dNormalize4 and dRfromQ's arithmetic written out in their order; each geometry is told that the
+// body moved, as the setters tell it (the calls were a third of a lone body's step); the
+// velocities are stored and the accumulators cleared.
+void MoveBody(dBodyID body, const BodyStorage& storage, const dReal* linear, const dReal* angular, dReal dt) {
+  dReal* position = storage.position;
+  dReal* q = storage.quaternion;
+  const BodyArrays& arrays = storage.arrays;
   for (int k = 0; k < 3; ++k) position[k] += dt * linear[k];
   // The turn and the orientation in locals: ODE's arrays are written once, at the end.
   const dReal w[3] = {angular[0], angular[1], angular[2]};
@@ -151,7 +154,7 @@ void MoveBody(dBodyID body, dReal* position, dReal* q, dReal* rotation, const Bo
   for (int k = 0; k < 4; ++k) turned[k] += dt * dq[k];
   NormaliseQuaternion(turned);
   for (int k = 0; k < 4; ++k) q[k] = turned[k];
-  RotationOf(turned, rotation);
+  RotationOf(turned, storage.rotation);
   for (dGeomID g = dBodyGetFirstGeom(body); g; g = dGeomGetBodyNext(g)) dGeomMoved(g);
 
   for (int k = 0; k < 3; ++k) {
@@ -163,7 +166,7 @@ void MoveBody(dBodyID body, dReal* position, dReal* q, dReal* rotation, const Bo
 
 }  // namespace
 
-void FinishBodyStep(dBodyID body, const BodyArrays& arrays, dReal inverse_mass, const dReal* inverse_inertia,
+void FinishBodyStep(dBodyID body, const BodyStorage& storage, dReal inverse_mass, const dReal* inverse_inertia,
                     const dReal* force, dReal* torque, dReal* linear, dReal* angular, dReal dt) {
   // Velocities.
   const dReal impulse_per_force = dt * inverse_mass;
@@ -173,8 +176,7 @@ void FinishBodyStep(dBodyID body, const BodyArrays& arrays, dReal inverse_mass, 
   }
   dMultiplyAdd0_331(angular, inverse_inertia, torque);
 
-  MoveBody(body, const_cast<dReal*>(dBodyGetPosition(body)), const_cast<dReal*>(dBodyGetQuaternion(body)),
-           const_cast<dReal*>(dBodyGetRotation(body)), arrays, linear, angular, dt);
+  MoveBody(body, storage, linear, angular, dt);
 }
 
 bool LoneBodyStepper::StepLevel(dBodyID body, const dReal* gravity, dReal dt) {
@@ -182,9 +184,11 @@ bool LoneBodyStepper::StepLevel(dBodyID body, const dReal* gravity, dReal dt) {
   // (exactly +0: the general step's sums of zeros keep a +0 as it is), no tilting torque, and a
   // torque about the vertical that turns the body (with none, the sum of zeros below could
   // change the sign of a zero turn rate).
-  const dReal* q = dBodyGetQuaternion(body);
-  const dReal* rotation = dBodyGetRotation(body);
-  const BodyArrays arrays = BodyArrays::Of(body);
+  BodyStorage storage;
+  const BodyMass m = inverse_inertia_.Of(body, storage);
+  const dReal* q = storage.quaternion;
+  const dReal* rotation = storage.rotation;
+  const BodyArrays& arrays = storage.arrays;
   const dReal* w = arrays.angular;
   const dReal* t = arrays.torque;
   const auto positive_zero = [](dReal x) { return x == 0 && !std::signbit(x); };
@@ -192,8 +196,6 @@ bool LoneBodyStepper::StepLevel(dBodyID body, const dReal* gravity, dReal dt) {
       !positive_zero(w[0]) || !positive_zero(w[1]) || t[0] != 0 || t[1] != 0) {
     return false;
   }
-  auto* position = const_cast<dReal*>(dBodyGetPosition(body));
-  const BodyMass m = inverse_inertia_.Of(body, position);
   const dReal* inverse = m.inverse_inertia;
   const dReal turn = inverse[10] * (t[2] * dt);
   // The vertical a principal axis (the general step skips the zero gyroscopic torque only
@@ -217,7 +219,7 @@ bool LoneBodyStepper::StepLevel(dBodyID body, const dReal* gravity, dReal dt) {
   angular[0] = w[0];
   angular[1] = w[1];
   angular[2] = w[2] + turn;
-  MoveBody(body, position, const_cast<dReal*>(q), const_cast<dReal*>(rotation), arrays, linear, angular, dt);
+  MoveBody(body, storage, linear, angular, dt);
   ++level_steps_;
   return true;
 }
@@ -239,7 +241,7 @@ void LoneBodyStepper::StepAnyPose(dBodyID body, const dReal* gravity, dReal dt) 
   if (dBodyGetGyroscopicMode(body) && b.inverse_mass > 0 && !about_principal_vertical) {
     AddImplicitGyroscopicTorque(*b.mass, rotation, b.angular, dt, b.torque);
   }
-  FinishBodyStep(body, b.arrays, b.inverse_mass, b.inverse_inertia, b.force, b.torque, b.linear, b.angular, dt);
+  FinishBodyStep(body, b.storage, b.inverse_mass, b.inverse_inertia, b.force, b.torque, b.linear, b.angular, dt);
 }
 
 }  // namespace ubersim::kernel

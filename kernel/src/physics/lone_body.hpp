@@ -27,51 +27,6 @@ struct BodyMass {
   dReal inverse_mass = 0;                   ///< 1/kg
 };
 
-/// BodyMass per body. ODE keeps all three in the body, right before its position (every ODE
-/// since 0.11 lays out dxBody as mass, invI, invMass, posr): read there, after checking once per
-/// body that what lies there is what dBodyGetMass and dBodySetMass's inverse give, bit for bit.
-/// Where it is not (another layout), the inverse is computed and cached as dBodySetMass does.
-class InverseInertiaCache {
- public:
-  /// `body`'s mass, inverse inertia and inverse mass, as dBodySetMass stored them.
-  BodyMass Of(dBodyID body);
-  /// Of(body) for a body whose position array (dBodyGetPosition's) is `position`.
-  BodyMass Of(dBodyID body, const dReal* position) {
-    // The step before's order, in ODE's storage: most lookups end here.
-    if (next_ < entries_.size() && entries_[next_].body == body && entries_[next_].in_place) {
-      ++next_;
-      return StoredAt(position);
-    }
-    return Of(body);
-  }
-
- private:
-  /// Where ODE keeps the mass, inverse inertia and inverse mass of the body whose position array
-  /// is `position`, if its dxBody is laid out as mass, invI, invMass, then the position.
-  static BodyMass StoredAt(const dReal* position) {
-    const dReal* inverse_mass = position - 1;
-    const dReal* inverse = inverse_mass - 12;
-    return {reinterpret_cast<const dMass*>(inverse - sizeof(dMass) / sizeof(dReal)), inverse, *inverse_mass};
-  }
-
-  struct Entry {
-    dBodyID body;
-    bool in_place;      // ODE's own storage checked: read there
-    dMass mass;         // else: a copy, and the inverse of its inertia
-    dMatrix3 inertia;
-    dMatrix3 inverse;
-  };
-  // A step asks for the same bodies in the same order as the step before: the entry after the
-  // last one found is looked at first.
-  std::vector<Entry> entries_;
-  std::size_t next_ = 0;
-};
-
-/// QuickStep's implicit gyroscopic torque (Lacoursière 2006) of a body of `mass` turned by
-/// `rotation` and turning at `angular`, added to `torque`, floating-point operation for operation.
-void AddImplicitGyroscopicTorque(const dMass& mass, const dReal* rotation, const dReal* angular, dReal dt,
-                                 dReal* torque);
-
 /// A body's velocity and accumulator arrays in ODE's own storage (the pointers dBodyGetLinearVel,
 /// dBodyGetAngularVel, dBodyGetForce and dBodyGetTorque return): written in place, as the
 /// setters would, without a call each.
@@ -87,12 +42,81 @@ struct BodyArrays {
   }
 };
 
+/// All of a body's arrays in ODE's storage: its pose's (dBodyGetPosition's, dBodyGetQuaternion's,
+/// dBodyGetRotation's) and BodyArrays. They lie inside the body, so they are the same for its
+/// whole life, and for any body ODE later puts at the same address.
+struct BodyStorage {
+  dReal* position = nullptr;    ///< m
+  dReal* quaternion = nullptr;  ///< w, x, y, z
+  dReal* rotation = nullptr;    ///< ODE's 3×4
+  BodyArrays arrays;            ///< velocities and accumulators
+  /// `body`'s, from its getters.
+  static BodyStorage Of(dBodyID body) {
+    return {const_cast<dReal*>(dBodyGetPosition(body)), const_cast<dReal*>(dBodyGetQuaternion(body)),
+            const_cast<dReal*>(dBodyGetRotation(body)), BodyArrays::Of(body)};
+  }
+};
+
+/// BodyMass per body. ODE keeps all three in the body, right before its position (every ODE
+/// since 0.11 lays out dxBody as mass, invI, invMass, posr): read there, after checking once per
+/// body that what lies there is what dBodyGetMass and dBodySetMass's inverse give, bit for bit.
+/// Where it is not (another layout), the inverse is computed and cached as dBodySetMass does.
+/// Each entry keeps the body's BodyStorage too, asked for once: a step's getter calls were a
+/// tenth of a level one-body robot's step.
+class InverseInertiaCache {
+ public:
+  /// `body`'s mass, inverse inertia and inverse mass, as dBodySetMass stored them.
+  BodyMass Of(dBodyID body) { return MassOf(Find(body)); }
+  /// The same, and `body`'s arrays into `storage`, with one lookup.
+  BodyMass Of(dBodyID body, BodyStorage& storage) {
+    Entry& e = Find(body);
+    storage = e.storage;
+    return MassOf(e);
+  }
+
+ private:
+  struct Entry {
+    dBodyID body;
+    BodyStorage storage;  // the body's arrays
+    bool in_place;        // ODE's own storage checked: read there
+    dMass mass;           // else: a copy, and the inverse of its inertia
+    dMatrix3 inertia;
+    dMatrix3 inverse;
+  };
+  // The entry of `body`, made at first sight.
+  Entry& Find(dBodyID body) {
+    // The step before's order: most lookups end at the first look.
+    if (next_ < entries_.size() && entries_[next_].body == body) return entries_[next_++];
+    return FindElsewhere(body);
+  }
+  Entry& FindElsewhere(dBodyID body);
+  BodyMass MassOf(Entry& e);
+
+  /// Where ODE keeps the mass, inverse inertia and inverse mass of the body whose position array
+  /// is `position`, if its dxBody is laid out as mass, invI, invMass, then the position.
+  static BodyMass StoredAt(const dReal* position) {
+    const dReal* inverse_mass = position - 1;
+    const dReal* inverse = inverse_mass - 12;
+    return {reinterpret_cast<const dMass*>(inverse - sizeof(dMass) / sizeof(dReal)), inverse, *inverse_mass};
+  }
+
+  // A step asks for the same bodies in the same order as the step before: the entry after the
+  // last one found is looked at first.
+  std::vector<Entry> entries_;
+  std::size_t next_ = 0;
+};
+
+/// QuickStep's implicit gyroscopic torque (Lacoursière 2006) of a body of `mass` turned by
+/// `rotation` and turning at `angular`, added to `torque`, floating-point operation for operation.
+void AddImplicitGyroscopicTorque(const dMass& mass, const dReal* rotation, const dReal* angular, dReal dt,
+                                 dReal* torque);
+
 /// The end of QuickStep's step of one body: `linear` and `angular` (its velocities so far) take
 /// `force` and `torque` over `dt` (torque through `inverse_inertia`, world frame), become the
-/// body's velocities (written to `arrays`, the body's), the pose follows, the geometries are
+/// body's velocities (written to `storage`, the body's), the pose follows, the geometries are
 /// told it moved, and the accumulators are cleared. `torque` is scaled by dt in place, as
 /// QuickStep does.
-void FinishBodyStep(dBodyID body, const BodyArrays& arrays, dReal inverse_mass, const dReal* inverse_inertia,
+void FinishBodyStep(dBodyID body, const BodyStorage& storage, dReal inverse_mass, const dReal* inverse_inertia,
                     const dReal* force, dReal* torque, dReal* linear, dReal* angular, dReal dt);
 
 /// Steps lone bodies (IsLoneBody) the way ODE 0.16's QuickStep steps a one-body island without

@@ -298,4 +298,32 @@ TEST(InverseInertiaCache, GivesTheMassOdeStoredAndFollowsANewOne) {
       << "ODE's body layout is not the one the cache reads: it falls back to computing the inverse";
 }
 
+TEST(InverseInertiaCache, GivesEachBodysOwnArraysWhateverTheOrderOfAsking) {
+  // The arrays the cache hands out are the getters' own, for the body asked about: in the order
+  // of the step before (the first look), in another order, and for a body made since.
+  OdeLibrary ode;
+  OdeWorld world = MakeWorld();
+  std::mt19937_64 rng(12);
+  ubersim::kernel::InverseInertiaCache cache;
+  std::vector<dBodyID> bodies;
+  for (int i = 0; i < 4; ++i) bodies.push_back(MakeTwin(world.get(), world.get(), rng, i).kernel);
+  const auto expect_getters = [&](dBodyID b, const char* when) {
+    ubersim::kernel::BodyStorage s;
+    const ubersim::kernel::BodyMass m = cache.Of(b, s);
+    EXPECT_EQ(s.position, dBodyGetPosition(b)) << when;
+    EXPECT_EQ(s.quaternion, dBodyGetQuaternion(b)) << when;
+    EXPECT_EQ(s.rotation, dBodyGetRotation(b)) << when;
+    EXPECT_EQ(s.arrays.linear, dBodyGetLinearVel(b)) << when;
+    EXPECT_EQ(s.arrays.angular, dBodyGetAngularVel(b)) << when;
+    EXPECT_EQ(s.arrays.force, dBodyGetForce(b)) << when;
+    EXPECT_EQ(s.arrays.torque, dBodyGetTorque(b)) << when;
+    EXPECT_EQ(m.mass, cache.Of(b).mass) << when;
+  };
+  for (dBodyID b : bodies) expect_getters(b, "first sight");
+  for (dBodyID b : bodies) expect_getters(b, "the same order");
+  for (auto it = bodies.rbegin(); it != bodies.rend(); ++it) expect_getters(*it, "the reverse order");
+  bodies.insert(bodies.begin() + 1, MakeTwin(world.get(), world.get(), rng, 9).kernel);
+  for (dBodyID b : bodies) expect_getters(b, "with a body made since");
+}
+
 }  // namespace
