@@ -80,6 +80,7 @@ StaticContactLog::BodyContacts& StaticContactLog::Of(dBodyID body) {
     if (bodies_[last_].body == body) return bodies_[last_];
   }
   bodies_.push_back({body, -1, false});
+  listed_ |= ListedBit(body);
   return bodies_.back();
 }
 
@@ -138,6 +139,7 @@ const LoggedContact* StaticContactLog::Made(dJointID joint) const {
 }
 
 const LoggedContact* StaticContactLog::Kept(dBodyID body) const {
+  if (!(listed_ & ListedBit(body))) return nullptr;  // no contact of its own this step
   for (const BodyContacts& b : bodies_) {
     if (b.body == body) return b.joined || b.newest < 0 ? nullptr : &contacts_[static_cast<std::size_t>(b.newest)];
   }

@@ -4,6 +4,7 @@
 // bit as ODE does it.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <ode/ode.h>
@@ -60,6 +61,7 @@ class StaticContactLog {
     contacts_.clear();
     bodies_.clear();
     last_ = 0;
+    listed_ = 0;
   }
 
  private:
@@ -78,6 +80,12 @@ class StaticContactLog {
   std::vector<LoggedContact> contacts_;
   std::vector<BodyContacts> bodies_;  // the bodies with contacts this step
   std::size_t last_ = 0;              // the last one asked for: a body's contacts come together
+  // One bit per listed body (ListedBit): most bodies asked about have no contacts, and a bit
+  // that is not set says so without the scan.
+  std::uint64_t listed_ = 0;
+  static std::uint64_t ListedBit(dBodyID body) {
+    return std::uint64_t{1} << ((reinterpret_cast<std::uintptr_t>(body) >> 4) & 63);
+  }
 };
 
 /// What a constraint row of the kernel's steppers holds beside its Jacobians: QuickStep's
