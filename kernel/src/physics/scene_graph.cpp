@@ -38,8 +38,8 @@ BodyImpl::BodyImpl(dWorldID world, const BodySpec& spec, std::uint64_t& non_fini
       quaternion_(dBodyGetQuaternion(body_.get())),
       linear_(dBodyGetLinearVel(body_.get())),
       angular_(dBodyGetAngularVel(body_.get())),
-      force_(dBodyGetForce(body_.get())),
-      torque_(dBodyGetTorque(body_.get())) {
+      force_(const_cast<dReal*>(dBodyGetForce(body_.get()))),
+      torque_(const_cast<dReal*>(dBodyGetTorque(body_.get()))) {
   const MassSpec& m = spec.mass;
   if (!(m.mass > 0.0) || !std::isfinite(m.mass)) {
     throw PluginError("body '" + spec.name + "': mass must be positive and finite");
@@ -128,7 +128,8 @@ void BodyImpl::CountIfNonFinite(const dReal* sum) {
 
 void BodyImpl::AddForce(const Vec3& f) {
   RequireFinite(f, "force");
-  dBodyAddForce(body_.get(), f.x(), f.y(), f.z());
+  // dBodyAddForce's whole work (facc += f, nothing else), without the call into ODE.
+  for (int k = 0; k < 3; ++k) force_[k] += f[k];
   CountIfNonFinite(force_);
 }
 
@@ -142,7 +143,8 @@ void BodyImpl::AddForceAtPoint(const Vec3& f, const Vec3& p) {
 
 void BodyImpl::AddTorque(const Vec3& t) {
   RequireFinite(t, "torque");
-  dBodyAddTorque(body_.get(), t.x(), t.y(), t.z());
+  // dBodyAddTorque's whole work (tacc += t, nothing else), without the call into ODE.
+  for (int k = 0; k < 3; ++k) torque_[k] += t[k];
   CountIfNonFinite(torque_);
 }
 

@@ -71,8 +71,8 @@ class BodyImpl final : public Body {
   const dReal* quaternion_;
   const dReal* linear_;
   const dReal* angular_;
-  const dReal* force_;   // the accumulated force and torque
-  const dReal* torque_;
+  dReal* force_;   // the accumulated force and torque (added to in place, as ODE's adders do)
+  dReal* torque_;
 };
 
 /// A geometry owned by a node, with its surface, optional directional friction and observers.
