@@ -905,9 +905,9 @@ void CollisionManager::SweepFastBalls() {
     for (std::size_t k = 0; k < sweep_shells_.size(); ++k) {
       GeomImpl& shell = *sweep_shells_[k];
       // Out of reach of the ball's path however the shell is turned: its pose is not needed.
-      const dBodyID body = shell.body()->id();
-      const dReal* at = dBodyGetPosition(body);
-      const dReal* w = dBodyGetLinearVel(body);
+      const BodyImpl& body = *shell.body();  // its ODE arrays, without a call each
+      const dReal* at = body.position_array();
+      const dReal* w = body.linear_array();
       const Vec3 relative = v - Vec3(w[0], w[1], w[2]);
       const double bound = relative.norm() * swept_ball_step_ + radius + sweep_shell_reach_[k];
       if ((from - Vec3(at[0], at[1], at[2])).squaredNorm() > bound * bound) continue;
@@ -926,7 +926,7 @@ void CollisionManager::SweepFastBalls() {
       if (other.body() && (k == 0 || sweep_targets_[k - 1]->body() != other.body())) {
         // A run's first target: its body's position, and the whole run passed when even its
         // farthest-reaching part is out of reach (then each part's own test fails too).
-        at = dBodyGetPosition(other.body()->id());
+        at = other.body()->position_array();
         const double run_bound = reach + radius + sweep_run_reach_[k];
         if ((from - Vec3(at[0], at[1], at[2])).squaredNorm() > run_bound * run_bound) {
           k = sweep_run_end_[k] - 1;
