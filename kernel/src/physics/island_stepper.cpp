@@ -67,10 +67,6 @@ void IslandStepper::FindBallIslands(const std::vector<dBodyID>& balls) {
   }
 }
 
-bool IslandStepper::InPass(std::size_t index, int pass) const {
-  return !split_ || group_[index] == pass;
-}
-
 void IslandStepper::GroupByDemand(const std::vector<dBodyID>& bodies, const std::vector<dBodyID>& balls,
                                   const std::vector<IterationDemand>& demands) {
   seeds_.clear();
@@ -171,12 +167,10 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
   std::size_t solved = 0;    // enabled bodies of this pass linked by a joint: QuickStep's work
   std::size_t on_field = 0;  // of those, static-contact islands (own_ takes them)
   for (std::size_t i = 0; i < bodies.size(); ++i) {
+    // Another pass's bodies are paused below, and only if QuickStep runs (most passes it does not).
+    if (!InPass(i, pass)) continue;
     dBodyID b = bodies[i];
     if (!dBodyIsEnabled(b)) continue;
-    if (!InPass(i, pass)) {
-      paused_.push_back(b);
-      continue;
-    }
     const LoggedContact* kept = static_contacts_ ? static_contacts_->Kept(b) : nullptr;
     if (kept && IsStaticContactIsland(b, kept)) {
       own_.push_back({b, kept});
@@ -227,6 +221,10 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
     }
   }
   if (solved == 0) return;
+  // The other passes' enabled bodies sit this QuickStep out.
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    if (!InPass(i, pass) && dBodyIsEnabled(bodies[i])) paused_.push_back(bodies[i]);
+  }
   for (dBodyID b : paused_) dBodyDisable(b);
   // A disabled body starts no island, and the search enables every body it reaches through a
   // joint: a disabled limb joins its island where the search meets it, after its root's joints.

@@ -92,7 +92,7 @@ class IslandStepper {
   // rest with one QuickStep of `iterations`; every other body sits the pass out.
   void Pass(dWorldID world, const std::vector<dBodyID>& bodies, int pass, int iterations, double dt);
   // Whether the index-th body of Step's list belongs to pass `pass`.
-  bool InPass(std::size_t index, int pass) const;
+  bool InPass(std::size_t index, int pass) const { return !split_ || group_[index] == pass; }
   // Whether the index-th body of Step's list is a limb (see Step).
   bool IsLimb(std::size_t index) const { return limbs_ && (*limbs_)[index]; }
   // A pass of `iterations` >= ContactIslandStepper::kFirstShuffle with both static-contact
