@@ -188,7 +188,7 @@ void BodyWatch::Add(const BodyImpl& body) {
     vectors_.push_back(v);
   }
   non_finite_sums_ = &body.non_finite_sums();
-  checked_.reset();
+  checked_ = kNeverChecked;
 }
 
 bool BodyWatch::Recheck() {

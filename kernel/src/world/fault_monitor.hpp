@@ -5,7 +5,6 @@
 
 #include <cstdint>
 #include <exception>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -98,7 +97,9 @@ class BodyWatch {
   bool Recheck();  // AllFinite's look at the values
   std::vector<const dReal*> vectors_;  // 3 values each
   const std::uint64_t* non_finite_sums_ = nullptr;  // the scene graph's counter
-  std::optional<std::uint64_t> checked_;          // its value when last found finite
+  // Its value when last found finite; kNeverChecked (a count it never reaches) before that.
+  static constexpr std::uint64_t kNeverChecked = ~std::uint64_t{0};
+  std::uint64_t checked_ = kNeverChecked;
 };
 
 /// The first non-finite value of a body (position, orientation, velocities, accumulated force
