@@ -801,11 +801,12 @@ void CollisionManager::SweepRobots() {
     for (std::size_t t = u + 1; t < swept_order_.size(); ++t) {
       const std::size_t k = swept_order_[t];
       if (swept_[k].x - swept_[i].x > swept_[i].reach_bound + farthest) break;  // so is every later one
-      swept_pairs_.emplace_back(std::min(i, k), std::max(i, k));
+      swept_pairs_.push_back((std::uint64_t{std::min(i, k)} << 32) | std::max(i, k));
     }
   }
   std::sort(swept_pairs_.begin(), swept_pairs_.end());
-  for (const auto& [i, k] : swept_pairs_) {
+  for (const std::uint64_t pair : swept_pairs_) {
+    const std::size_t i = pair >> 32, k = pair & 0xffffffffu;
     const SweptHull& sa = swept_[i];
     GeomImpl& a = *sa.geom;
     const SweptHull& sb = swept_[k];

@@ -324,7 +324,9 @@ class CollisionManager {
   };
   std::vector<SweptHull> swept_;
   std::vector<std::size_t> swept_order_;                          // swept_ by x
-  std::vector<std::pair<std::size_t, std::size_t>> swept_pairs_;  // within reach along x
+  // Within reach along x: each pair (i, k), i < k, as one number i·2³² + k, so that sorting
+  // numbers sorts the pairs.
+  std::vector<std::uint64_t> swept_pairs_;
   bool hulls_found_ = false;
   std::vector<double> hull_slack_;  // SweptHull::slack of each of hulls_
   std::vector<std::pair<const GeomImpl*, const GeomImpl*>> hull_touching_;  // this step's shell pairs
