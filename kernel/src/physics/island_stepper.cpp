@@ -175,7 +175,7 @@ void IslandStepper::Pass(dWorldID world, const std::vector<dBodyID>& bodies, int
     if (kept && IsStaticContactIsland(b, kept)) {
       own_.push_back({b, kept});
       ++on_field;
-    } else if (!kept && IsLoneBody(b)) {
+    } else if (!kept && IsLoneEnabledBody(b)) {  // enabled: looked at above
       own_.push_back({b, nullptr});
     } else if (!kept && static_contacts_ && InLinkedIsland(b)) {
       // Reached by the search of a linked island before it: stepped with that island.

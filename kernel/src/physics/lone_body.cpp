@@ -8,15 +8,23 @@
 
 namespace ubersim::kernel {
 
-bool StepsAsQuickStepsAFreeBody(dBodyID body) {
-  return dBodyIsEnabled(body) && !dBodyIsKinematic(body) && !dBodyGetFiniteRotationMode(body) &&
-         dBodyGetLinearDamping(body) == 0 && dBodyGetAngularDamping(body) == 0 &&
-         dBodyGetMaxAngularSpeed(body) == dInfinity;
+namespace {
+
+// StepsAsQuickStepsAFreeBody but for being enabled.
+bool AsksForNothingLeftToOde(dBodyID body) {
+  return !dBodyIsKinematic(body) && !dBodyGetFiniteRotationMode(body) && dBodyGetLinearDamping(body) == 0 &&
+         dBodyGetAngularDamping(body) == 0 && dBodyGetMaxAngularSpeed(body) == dInfinity;
 }
 
-bool IsLoneBody(dBodyID body) {
+}  // namespace
+
+bool StepsAsQuickStepsAFreeBody(dBodyID body) { return dBodyIsEnabled(body) && AsksForNothingLeftToOde(body); }
+
+bool IsLoneBody(dBodyID body) { return dBodyIsEnabled(body) && IsLoneEnabledBody(body); }
+
+bool IsLoneEnabledBody(dBodyID body) {
   // dBodyGetJoint(body, 0) is one pointer read; dBodyGetNumJoints walks the whole list.
-  return dBodyGetJoint(body, 0) == nullptr && StepsAsQuickStepsAFreeBody(body);
+  return dBodyGetJoint(body, 0) == nullptr && AsksForNothingLeftToOde(body);
 }
 
 namespace {

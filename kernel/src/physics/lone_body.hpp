@@ -14,6 +14,8 @@ namespace ubersim::kernel {
 /// cap on the angular speed). The kernel sets no moved-callback on its bodies, which ODE cannot
 /// be asked about.
 bool IsLoneBody(dBodyID body);
+/// IsLoneBody for a body known to be enabled (one call into ODE fewer).
+bool IsLoneEnabledBody(dBodyID body);
 
 /// Whether `body` is enabled, dynamic and asks for none of the options the kernel's steppers
 /// leave to ODE (finite rotation, damping, a cap on the angular speed); its joints aside.
