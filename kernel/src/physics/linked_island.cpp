@@ -179,14 +179,19 @@ void LinkedIslandStepper::Step(int island, const dReal* gravity, const ContactSo
   // Stage 4: unbounded rows first, then the SOR sweeps, shuffled as ContactIslandStepper's.
   UnboundedFirst(rows_, m, order_);
   fc_.assign(6 * n, 0);
+  for (int i = 0; i < m; ++i) {  // each row's bodies' entries, found once for all sweeps
+    Row& r = rows_[static_cast<std::size_t>(i)];
+    r.f1 = &fc_[6 * static_cast<std::size_t>(r.b1)];
+    r.f2 = r.b2 >= 0 ? &fc_[6 * static_cast<std::size_t>(r.b2)] : nullptr;
+  }
   for (int iteration = 0; iteration < iterations; ++iteration) {
     ShuffleIfDue(iteration, order_);
     for (const int index : order_) {
       Row& r = rows_[static_cast<std::size_t>(index)];
       dReal delta = r.rhs - r.lambda * r.cfm;
-      dReal* f1 = &fc_[6 * static_cast<std::size_t>(r.b1)];
+      dReal* f1 = r.f1;
       delta -= Dot6(f1, r.j);
-      dReal* f2 = r.b2 >= 0 ? &fc_[6 * static_cast<std::size_t>(r.b2)] : nullptr;
+      dReal* f2 = r.f2;
       if (f2) delta -= Dot6(f2, r.j2);
       delta = ClampedUpdate(r, rows_.data(), delta);
       if (delta != 0) {

@@ -56,6 +56,8 @@ class LinkedIslandStepper {
     dReal imj2[6];
     int b1;
     int b2;
+    dReal* f1;  // the sweeps' M⁻¹·Jᵀ·λ of body b1 (fc_'s), and of b2 (null: the static world)
+    dReal* f2;
   };
   struct Island {
     std::size_t first_body;
