@@ -186,7 +186,7 @@ void ContactIslandStepper::Step(dBodyID body, const LoggedContact& newest, const
   // right-hand side c/h - J·(v/h + M⁻¹·f).
   const dReal fps = dRecip(dt);
   row_count_ = 0;
-  const dReal* position = dBodyGetPosition(body);
+  const dReal* position = b.storage.position;
   // Newest first: the order of the body's joint list, had they been ODE joints.
   for (const LoggedContact* c = &newest; c; c = c->previous >= 0 ? &log.At(c->previous) : nullptr) {
     AddContactRows(*c, position, linear, angular, settings, fps);

@@ -122,11 +122,11 @@ void LinkedIslandStepper::Step(int island, const dReal* gravity, const ContactSo
     const int b1 = BodyIndex(c.body, is.first_body, n);
     const int b2 = c.other ? BodyIndex(c.other, is.first_body, n) : -1;
     const FreeBodyStart& s1 = starts_[static_cast<std::size_t>(b1)];
-    const ContactBody first_body{dBodyGetPosition(c.body), s1.linear, s1.angular};
+    const ContactBody first_body{s1.storage.position, s1.linear, s1.angular};
     ContactBody second_body;
     if (b2 >= 0) {
       const FreeBodyStart& s2 = starts_[static_cast<std::size_t>(b2)];
-      second_body = {dBodyGetPosition(c.other), s2.linear, s2.angular};
+      second_body = {s2.storage.position, s2.linear, s2.angular};
     }
     Row* row = &rows_[first];
     WriteContactRows(c.contact, s, c.reversed, m, row, first_body, b2 >= 0 ? &second_body : nullptr, settings, fps,
