@@ -121,6 +121,7 @@ class Robot {
   double dribbler_speed_ = 0.0;
   double rest_height_ = 0.0;
   std::vector<std::unique_ptr<Part>> parts_;  // drive, dribbler, kicker (those present)
+  Part* part_of_[3] = {};                     // the same by kind (kDrive first); null: none
   Drive* drive_ = nullptr;
   Dribbler* dribbler_ = nullptr;
   Kicker* kicker_ = nullptr;
