@@ -60,7 +60,7 @@ struct PositionEvent {
   std::optional<Vec3> velocity;         ///< new linear velocity, m/s
   std::optional<Vec3> angular_velocity; ///< new angular velocity, rad/s
   std::optional<bool> present;          ///< robots: false takes it off the field, true puts it on
-  EventReply reply;                     ///< optional: what became of it
+  EventReply reply = {};                ///< optional: what became of it
 };
 
 /// A robot's specifications as its team announces them (the simulation protocol's RobotSpecs),
@@ -92,7 +92,7 @@ struct RobotSpec {
 struct RobotSpecEvent {
   RobotId robot;     ///< which robot
   RobotSpec spec;    ///< the values over the team's model
-  EventReply reply;  ///< optional: errors per value, values the model has no place for
+  EventReply reply = {};  ///< optional: errors per value, values the model has no place for
 };
 
 /// The field size a client asks for (the simulation protocol's geometry), m. The world
@@ -105,7 +105,7 @@ struct FieldEvent {
   double boundary_width = 0; ///< touch line to wall
   std::optional<double> penalty_area_depth;  ///< when given
   std::optional<double> penalty_area_width;  ///< when given
-  EventReply reply;          ///< optional: applied, or why not
+  EventReply reply = {};                     ///< optional: applied, or why not
 };
 
 /// A transport setting changed while running (e.g. "vision_port" from the simulation protocol):
@@ -113,7 +113,7 @@ struct FieldEvent {
 struct TransportSettingEvent {
   std::string name;        ///< e.g. "vision_port"
   std::int64_t value = 0;  ///< the new value
-  EventReply reply;        ///< optional: taken, or why not
+  EventReply reply = {};   ///< optional: taken, or why not
 };
 
 /// Wheel speeds, rad/s, in the order of the drive's wheels.
