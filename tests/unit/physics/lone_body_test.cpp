@@ -261,15 +261,22 @@ TEST(IsLoneBody, LeavesToOdeWhatTheStepperDoesNotReproduce) {
   }
 }
 
+// `count` bodies of random shapes, masses and states in `world` (the kernel's side of MakeTwin's
+// pairs), drawn from `seed`.
+std::vector<dBodyID> RandomBodies(dWorldID world, std::uint64_t seed, int count) {
+  std::mt19937_64 rng(seed);
+  std::vector<dBodyID> bodies;
+  for (int i = 0; i < count; ++i) bodies.push_back(MakeTwin(world, world, rng, i).kernel);
+  return bodies;
+}
+
 TEST(InverseInertiaCache, GivesTheMassOdeStoredAndFollowsANewOne) {
   // The cache reads a body's mass, inverse inertia and inverse mass where ODE keeps them: they
   // must be what dBodyGetMass and dBodySetMass's inverse give, and stay so when the mass changes.
   OdeLibrary ode;
   OdeWorld world = MakeWorld();
-  std::mt19937_64 rng(11);
   ubersim::kernel::InverseInertiaCache cache;
-  std::vector<dBodyID> bodies;
-  for (int i = 0; i < 5; ++i) bodies.push_back(MakeTwin(world.get(), world.get(), rng, i).kernel);
+  const std::vector<dBodyID> bodies = RandomBodies(world.get(), 11, 5);
   const auto expect_ode_mass = [&](dBodyID b, const char* when) {
     dMass m;
     dBodyGetMass(b, &m);
@@ -303,10 +310,10 @@ TEST(InverseInertiaCache, GivesEachBodysOwnArraysWhateverTheOrderOfAsking) {
   // of the step before (the first look), in another order, and for a body made since.
   OdeLibrary ode;
   OdeWorld world = MakeWorld();
-  std::mt19937_64 rng(12);
   ubersim::kernel::InverseInertiaCache cache;
-  std::vector<dBodyID> bodies;
-  for (int i = 0; i < 4; ++i) bodies.push_back(MakeTwin(world.get(), world.get(), rng, i).kernel);
+  std::vector<dBodyID> bodies = RandomBodies(world.get(), 12, 5);
+  const dBodyID unseen = bodies.back();  // asked about only at the end
+  bodies.pop_back();
   const auto expect_getters = [&](dBodyID b, const char* when) {
     ubersim::kernel::BodyStorage s;
     const ubersim::kernel::BodyMass m = cache.Of(b, s);
@@ -322,7 +329,7 @@ TEST(InverseInertiaCache, GivesEachBodysOwnArraysWhateverTheOrderOfAsking) {
   for (dBodyID b : bodies) expect_getters(b, "first sight");
   for (dBodyID b : bodies) expect_getters(b, "the same order");
   for (auto it = bodies.rbegin(); it != bodies.rend(); ++it) expect_getters(*it, "the reverse order");
-  bodies.insert(bodies.begin() + 1, MakeTwin(world.get(), world.get(), rng, 9).kernel);
+  bodies.insert(bodies.begin() + 1, unseen);
   for (dBodyID b : bodies) expect_getters(b, "with a body made since");
 }
 
