@@ -18,8 +18,8 @@ struct OmniModel {
   double max_speed = 3.0;          ///< m/s, the drive's limits.max_speed
   double max_accel = 3.0;          ///< m/s², the drive's limits.max_accel
   double max_angular_speed = 10.0; ///< rad/s, the drive's limits.max_angular_speed
-  std::string name;                ///< in titles; empty: "Omni robot"
-  std::string subject;             ///< how the setup text names it; empty: the modern four-wheel robot
+  std::string name = {};           ///< in titles; empty: "Omni robot"
+  std::string subject = {};        ///< how the setup text names it; empty: the modern four-wheel robot
 };
 /// The modern four-wheel robot on the omni drive: a body per wheel on a motorised hinge.
 inline const OmniModel kWheelBodyOmni{"omni", "robots/ssl-omni-2026.yaml"};
