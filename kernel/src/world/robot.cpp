@@ -173,7 +173,7 @@ Robot::Robot(const RobotPlacement& placement, NodeImpl& team_node, PluginRegistr
     CollectJoints(*node_, before);
     Part& p = *part;
     parts_.push_back(std::move(part));
-    if (kind != PluginKind::kTransport) part_of_[static_cast<std::size_t>(kind) - 1] = &p;  // kinds 1 to 3
+    if (kind != PluginKind::kTransport) part_of_[static_cast<std::size_t>(kind) - 1] = &p;  // PartOf's
     // Any exception from Configure means the robot cannot be built as its model file says: a
     // load error naming the robot, its model file, the plugin, its library and the reason (exit 4
     // from the CLI; `ubersim validate` runs Configure too), never a fault of a running world.
@@ -393,7 +393,7 @@ bool Robot::Command(const CommandEvent& e, std::string& why) {
   // PluginError is the part refusing this command (a wheel count that does not fit): the
   // command is rejected and the part carries on. Anything else is a fault of the part.
   const auto deliver = [&](PluginKind kind, const char* phase, auto&& call) {
-    Part* part = part_of_[static_cast<std::size_t>(kind) - 1];
+    Part* part = PartOf(kind);
     if (!part) return refuse(std::string("robot has no ") + ToString(kind));
     if (part->failed) return refuse(std::string("its ") + ToString(kind) + " is switched off after a fault");
     const bool alive = Guarded(*part, phase, [&] {
@@ -436,9 +436,7 @@ void Robot::SetVelocity(const Vec3& linear, const Vec3& angular) {
 }
 
 void Robot::Placed() {
-  for (auto& p : parts_) {
-    if (p->kind == PluginKind::kDrive) Guarded(*p, "Placed", [&] { drive_->Placed(); });
-  }
+  if (Part* p = PartOf(PluginKind::kDrive)) Guarded(*p, "Placed", [&] { drive_->Placed(); });
 }
 
 void Robot::SetPresent(bool present) {
@@ -472,11 +470,8 @@ void Robot::WriteKinematics(RobotState& s) const {
 
 bool Robot::TouchesBall() const {
   bool touches = false;
-  for (const auto& p : parts_) {
-    if (p->kind == PluginKind::kDribbler && !p->failed) {
-      Queried(*p, "TouchesBall", [&] { touches = dribbler_->TouchesBall(); });
-    }
-  }
+  Part* p = PartOf(PluginKind::kDribbler);
+  if (p && !p->failed) Queried(*p, "TouchesBall", [&] { touches = dribbler_->TouchesBall(); });
   return touches;
 }
 

@@ -122,6 +122,10 @@ class Robot {
   double rest_height_ = 0.0;
   std::vector<std::unique_ptr<Part>> parts_;  // drive, dribbler, kicker (those present)
   Part* part_of_[3] = {};                     // the same by kind (kDrive first); null: none
+  // The part of `kind` (drive, dribbler or kicker), or null: the robot has none.
+  Part* PartOf(PluginKind kind) const {
+    return kind == PluginKind::kTransport ? nullptr : part_of_[static_cast<std::size_t>(kind) - 1];
+  }
   Drive* drive_ = nullptr;
   Dribbler* dribbler_ = nullptr;
   Kicker* kicker_ = nullptr;
