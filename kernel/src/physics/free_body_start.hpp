@@ -12,7 +12,6 @@ namespace ubersim::kernel {
 /// inertia, the velocities read.
 struct FreeBodyStart {
   const dMass* mass = nullptr;      ///< the body's mass parameters (InverseInertiaCache::Of)
-  const dReal* rotation = nullptr;  ///< the body's, ODE's 3×4
   dVector3 force{};                 ///< the accumulated force, gravity added, N
   dVector3 torque{};                ///< the accumulated torque, N·m
   dVector3 linear{};                ///< linear velocity, m/s
@@ -27,7 +26,6 @@ struct FreeBodyStart {
 inline void StartFreeBodyStep(dBodyID body, const dReal* gravity, InverseInertiaCache& cache, FreeBodyStart& s) {
   const BodyMass m = cache.Of(body, s.storage);  // the arrays too: no getter calls
   s.mass = m.mass;
-  s.rotation = s.storage.rotation;
   const BodyArrays& arrays = s.storage.arrays;
   for (int k = 0; k < 3; ++k) {
     s.force[k] = arrays.force[k];
@@ -42,8 +40,8 @@ inline void StartFreeBodyStep(dBodyID body, const dReal* gravity, InverseInertia
     }
   }
   dMatrix3 tmp = {};
-  dMultiply2_333(tmp, m.inverse_inertia, s.rotation);
-  dMultiply0_333(s.inverse_inertia, s.rotation, tmp);
+  dMultiply2_333(tmp, m.inverse_inertia, s.storage.rotation);
+  dMultiply0_333(s.inverse_inertia, s.storage.rotation, tmp);
   s.inverse_mass = m.inverse_mass;
 }
 
@@ -53,7 +51,7 @@ inline void StartConstrainedBodyStep(dBodyID body, const dReal* gravity, Inverse
                                      FreeBodyStart& s) {
   StartFreeBodyStep(body, gravity, cache, s);
   if (dBodyGetGyroscopicMode(body) && s.inverse_mass > 0) {
-    AddImplicitGyroscopicTorque(*s.mass, s.rotation, s.angular, dt, s.torque);
+    AddImplicitGyroscopicTorque(*s.mass, s.storage.rotation, s.angular, dt, s.torque);
   }
 }
 

@@ -106,22 +106,21 @@ void IslandStepper::GroupByDemand(const std::vector<dBodyID>& bodies, const std:
       });
     }
   }
-  // Every body not reached from a seed takes the other islands' count: the pass after the
-  // seeds' (pass_of adds it, if no seed has that count), as it always came.
-  bool unmarked = marked_.size() < bodies.size();
-  if (!unmarked) {
-    for (dBodyID b : bodies) {
-      if (!marked(b)) {
-        unmarked = true;
-        break;
-      }
-    }
-  }
-  group_.assign(bodies.size(), unmarked ? pass_of(other_iterations_) : -1);
   // The few marked bodies looked up in the list, not the list in them (each body is listed once).
+  group_.assign(bodies.size(), -1);
+  std::size_t grouped = 0;
   for (const auto& [body, pass] : marked_) {
     const auto at = std::find(bodies.begin(), bodies.end(), body);
-    if (at != bodies.end()) group_[static_cast<std::size_t>(at - bodies.begin())] = pass;
+    if (at == bodies.end()) continue;
+    group_[static_cast<std::size_t>(at - bodies.begin())] = pass;
+    ++grouped;
+  }
+  // Every body not reached from a seed takes the other islands' count: the pass after the
+  // seeds' (pass_of adds it, if no seed has that count).
+  if (grouped == bodies.size()) return;
+  const int other = pass_of(other_iterations_);
+  for (int& g : group_) {
+    if (g < 0) g = other;
   }
 }
 

@@ -243,7 +243,7 @@ void LoneBodyStepper::StepAnyPose(dBodyID body, const dReal* gravity, dReal dt) 
   // most robots), the momentum lies along the turn and the gyroscopic torque is zero: its work
   // is skipped. QuickStep's implicit form computes it as zero but for the last bit of the turn
   // rate, so here the stepper agrees with QuickStep to rounding, not to the bit.
-  const dReal* rotation = b.rotation;
+  const dReal* rotation = b.storage.rotation;
   const bool about_principal_vertical = b.angular[0] == 0 && b.angular[1] == 0 && rotation[8] == 0 &&
                                         rotation[9] == 0 && b.mass->I[2] == 0 && b.mass->I[6] == 0;
   if (dBodyGetGyroscopicMode(body) && b.inverse_mass > 0 && !about_principal_vertical) {
